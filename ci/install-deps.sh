@@ -7,7 +7,7 @@ set -euo pipefail
 pkgs=(
   build-essential cmake pkg-config
   libeigen3-dev libyaml-cpp-dev libcli11-dev libfmt-dev libgtest-dev
-  libhdf5-dev libgmsh-dev gmsh
+  libhdf5-dev libgmsh-dev gmsh python3-gmsh
   libopenmpi-dev openmpi-bin
   python3-pytest python3-numpy python3-matplotlib python3-h5py python3-dolfinx
   yade

@@ -1,0 +1,39 @@
+# What people type. Each target installs missing Debian packages and builds what it needs.
+#   make            build build/bin/qdemsph (CPU + CUDA backend when nvcc is present)
+#   make run        the demo: a viscoelastic cantilever released from a deflected state
+#   make test       unit tests + the quick tier of the verification suite
+#   make verify     the verification suite (FULL=1: the long tier)
+#   make references regenerate the stored FEniCSx and YADE reference results
+BUILD ?= build
+JOBS ?= $(shell nproc)
+PY := /usr/bin/python3
+FULL ?= 0
+
+.PHONY: all deps build run test unit verify references clean
+all: build
+
+deps:
+	@bash ci/install-deps.sh
+
+build: deps
+	@cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_ARGS) >/dev/null
+	@cmake --build $(BUILD) -j $(JOBS)
+
+run: build
+	@bash ci/demo.sh $(BUILD)
+
+unit: build
+	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+verify: build
+	@$(PY) -m pytest verification -q $(if $(filter 1,$(FULL)),--full,) \
+	  --qdemsph $(BUILD)/bin/qdemsph --junitxml $(BUILD)/verify/junit.xml
+
+test: unit verify
+
+references: build
+	@bash references/fenicsx/make_references.sh $(BUILD)/bin/qdemsph
+	@bash references/yade/run_all.sh
+
+clean:
+	rm -rf $(BUILD)

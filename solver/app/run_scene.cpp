@@ -1,0 +1,284 @@
+#include "app/run_scene.hpp"
+
+#include <fmt/format.h>
+#include <omp.h>
+
+#include <chrono>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "core/progress.hpp"
+#include "integrate/backend.hpp"
+#include "integrate/stepper.hpp"
+#include "io/fields_h5.hpp"
+#include "io/json.hpp"
+#include "io/probes_csv.hpp"
+#include "mesh/gmsh_io.hpp"
+#include "model/model.hpp"
+
+namespace qdemsph {
+namespace {
+
+// A probe resolved to vertex indices and weights: value = sum w_i * (x_i - X_i [disp]).
+struct ResolvedProbe {
+  std::vector<std::int64_t> vertices;
+  std::vector<double> weights;
+  bool displacement = true;
+};
+
+std::vector<ResolvedProbe> resolve_probes(const Scene& scene, const Model& model) {
+  std::vector<ResolvedProbe> out;
+  for (std::size_t p = 0; p < scene.probes.size(); ++p) {
+    const ProbeSpec& ps = scene.probes[p];
+    const BodyRange* body = nullptr;
+    for (const auto& b : model.bodies)
+      if (b.scene_index == ps.body) body = &b;
+    ResolvedProbe r;
+    r.displacement = ps.kind == ProbeSpec::Kind::Displacement;
+    double wsum = 0;
+    for (std::int64_t i = body->v_begin; i < body->v_end; ++i) {
+      if (r.displacement && !ps.region.contains(model.X[i])) continue;
+      const double w = r.displacement ? 1.0 : model.mass[i];
+      r.vertices.push_back(i);
+      r.weights.push_back(w);
+      wsum += w;
+    }
+    if (r.vertices.empty())
+      throw InputError(fmt::format("probes[{}] ('{}'): the region selects no vertex of body '{}'",
+                                   p, ps.name, body->name));
+    for (auto& w : r.weights) w /= wsum;
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+std::vector<Vec3> evaluate_probes(const std::vector<ResolvedProbe>& probes, const Model& model,
+                                  const std::vector<Vec3>& x) {
+  std::vector<Vec3> vals;
+  for (const auto& p : probes) {
+    Vec3 s{0, 0, 0};
+    for (std::size_t k = 0; k < p.vertices.size(); ++k) {
+      const std::int64_t i = p.vertices[k];
+      s += p.weights[k] * (p.displacement ? x[i] - model.X[i] : x[i]);
+    }
+    vals.push_back(s);
+  }
+  return vals;
+}
+
+Json energies_json(const Energies& e) {
+  Json j = Json::object();
+  j["kinetic"] = e.kinetic;
+  j["strain"] = e.strain;
+  j["potential"] = e.potential;
+  j["dissipated"] = e.dissipated;
+  j["total"] = e.total();
+  return j;
+}
+
+Json relax_json(const RelaxResult& r) {
+  Json j = Json::object();
+  j["converged"] = r.converged;
+  j["iterations"] = r.iterations;
+  j["residual"] = r.residual;
+  j["reference_force"] = r.reference;
+  return j;
+}
+
+std::string stages_of(const Model& model) {
+  const std::size_t free_bodies =
+      std::count_if(model.bodies.begin(), model.bodies.end(), [](auto& b) { return !b.fixed; });
+  std::string s = fmt::format("elements ({} free tets), integration ({} free vertices)",
+                              model.n_free_tets, model.n_free_vertices);
+  s += model.bodies.size() > 1 && free_bodies > 0
+           ? "; contact: not built yet (scene has several bodies, they will pass through each other)"
+           : "; no contact: one body";
+  s += "; no SPH: no fluid";
+  return s;
+}
+
+}  // namespace
+
+int run_scene(const Scene& scene, const RunOptions& opt) {
+  const auto wall0 = std::chrono::steady_clock::now();
+  if (scene.run.threads > 0) omp_set_num_threads(scene.run.threads);
+  const Model model = build_model(scene);
+  const std::string backend_name = opt.backend.value_or(scene.run.backend);
+  auto be = make_backend(backend_name);
+  be->upload(model);
+  const double dt = choose_dt(model, scene.run.dt, scene.run.dt_safety);
+  const std::filesystem::path dir = opt.out.value_or(scene.output.dir);
+  const auto probes = resolve_probes(scene, model);
+  std::vector<std::string> names;
+  for (const auto& p : scene.probes) names.push_back(p.name);
+
+  FieldWriter fields(dir, model.X, model.tets, model.body);
+  ProbeWriter probe_csv(dir, names);
+  Stepper st(model, *be, dt);
+  PhaseTimers& timers = st.timers();
+
+  Json summary = Json::object();
+  summary["scene"] = scene.file.string();
+  summary["name"] = scene.name;
+  summary["backend"] = be->name();
+  summary["threads"] = backend_name == "cpu" ? omp_get_max_threads() : 0;
+  summary["mode"] = scene.run.mode == RunMode::Static ? "static" : "dynamic";
+  summary["n_bodies"] = model.bodies.size();
+  summary["n_vertices"] = model.n_vertices();
+  summary["n_tets"] = model.n_tets();
+  summary["n_free_tets"] = model.n_free_tets;
+  summary["dt"] = dt;
+  summary["dt_critical"] = model.dt_critical;
+  summary["stages"] = stages_of(model);
+  summary["device_bytes"] = be->device_bytes();
+
+  auto write_fields = [&](bool stress) {
+    auto scope = timers.scope("output");
+    const HostFields h = be->download(stress);
+    fields.write(st.time(), st.steps(), h.x, h.v, h.stress, h.von_mises);
+  };
+  auto write_probes = [&] {
+    auto scope = timers.scope("output");
+    const HostFields h = be->download(false);
+    probe_csv.write(st.time(), evaluate_probes(probes, model, h.x), be->energies());
+  };
+  auto finish = [&](const std::string& status) {
+    summary["status"] = status;
+    summary["steps"] = st.steps();
+    summary["sim_time"] = st.time();
+    summary["energies"] = energies_json(be->energies());
+    Json phases = Json::object();
+    for (const auto& [k, v] : timers.seconds()) phases[k] = v;
+    summary["phases"] = phases;
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    summary["wall_s"] = wall;
+    summary["steps_per_s"] = st.steps() > 0 ? st.steps() / wall : 0.0;
+    summary.write_file(dir / "summary.json");
+  };
+
+  ProgressLine progress(!opt.quiet && isatty(STDERR_FILENO));
+  int code = 0;
+  try {
+    bool preload = false;
+    for (const auto& l : scene.loads) preload = preload || l.preload;
+    auto relax_progress = [&](std::int64_t it, double res) {
+      const double frac = res > 0 ? std::clamp(std::log(res) / std::log(scene.run.static_tolerance), 0.0, 1.0) : 1.0;
+      progress.update(frac, it, fmt::format("residual {:.2e}", res).c_str());
+    };
+    if (scene.run.mode == RunMode::Static) {
+      write_probes();
+      const RelaxResult r = st.relax(scene.run.static_tolerance, scene.run.static_max_steps,
+                                     false, relax_progress);
+      progress.finish();
+      summary["static"] = relax_json(r);
+      write_probes();
+      write_fields(true);
+      if (!r.converged) {
+        fmt::print(stderr,
+                   "qdemsph: static solve did not converge: residual {:.3e} > tolerance {:.3e} "
+                   "after {} steps (run.static.max_steps)\n",
+                   r.residual, scene.run.static_tolerance, r.iterations);
+        code = 3;
+      } else if (!opt.quiet) {
+        fmt::print("static solve converged: residual {:.3e} after {} steps\n", r.residual,
+                   r.iterations);
+      }
+      finish(r.converged ? "converged" : "not_converged");
+      return code;
+    }
+    if (preload) {
+      const RelaxResult r = st.relax(scene.run.static_tolerance, scene.run.static_max_steps,
+                                     true, relax_progress);
+      progress.finish();
+      summary["preload"] = relax_json(r);
+      if (!r.converged)
+        throw SimulationError(fmt::format(
+            "initial static solve (preload) did not converge: residual {:.3e} after {} steps",
+            r.residual, r.iterations));
+    }
+    const double end = scene.run.end_time;
+    const double probe_dt = scene.output.probes_every;
+    const double field_dt = scene.output.fields_every;
+    double next_probe = probe_dt, next_field = field_dt;
+    write_probes();
+    write_fields(true);
+    const auto nsteps = static_cast<std::int64_t>(std::ceil(end / dt - 1e-9));
+    for (std::int64_t n = 1; n <= nsteps; ++n) {
+      st.step();
+      const double t = st.time();
+      if (probe_dt > 0 ? t >= next_probe - 1e-12 * end : n % 100 == 0 || n == nsteps) {
+        write_probes();
+        next_probe += probe_dt;
+      }
+      if (field_dt > 0 && t >= next_field - 1e-12 * end && n != nsteps) {
+        write_fields(true);
+        next_field += field_dt;
+      }
+      progress.update(static_cast<double>(n) / nsteps, n, fmt::format("t = {:.4g} s", t).c_str());
+    }
+    st.check();
+    progress.finish();
+    write_fields(true);
+    finish("completed");
+  } catch (const SimulationError& e) {
+    progress.finish();
+    summary["error"] = e.what();
+    try {
+      write_fields(true);  // final diagnostic snapshot
+    } catch (...) {
+    }
+    finish("failed");
+    throw;
+  }
+  if (!opt.quiet)
+    fmt::print("{}: {} steps, t = {:.6g} s, wall {:.2f} s; output in {}\n", scene.name,
+               st.steps(), st.time(),
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count(),
+               dir.string());
+  return code;
+}
+
+void print_info(const Scene& scene) {
+  const Model model = build_model(scene);
+  auto be = make_host_backend();
+  be->upload(model);
+  const double dt = choose_dt(model, scene.run.dt, scene.run.dt_safety);
+  fmt::print("scene      {}\n", scene.file.string());
+  fmt::print("mode       {}\n", scene.run.mode == RunMode::Static ? "static" : "dynamic");
+  fmt::print("stages     {}\n", stages_of(model));
+  fmt::print("bodies     {}\n", model.bodies.size());
+  for (const auto& b : model.bodies)
+    fmt::print("  {:<16} {:>9} vertices {:>10} tets{}\n", b.name, b.v_end - b.v_begin,
+               b.t_end - b.t_begin, b.fixed ? "  (fixed: not integrated)" : "");
+  fmt::print("sizes      {} vertices, {} tets, {} surface triangles\n", model.n_vertices(),
+             model.n_tets(), model.surface.size());
+  fmt::print("dt         {:.4e} s (stability limit {:.4e} s{})\n", dt, model.dt_critical,
+             scene.run.dt ? ", fixed by the scene" : fmt::format(", safety {}", scene.run.dt_safety));
+  if (scene.run.mode == RunMode::Dynamic)
+    fmt::print("steps      {} to t = {} s\n",
+               static_cast<std::int64_t>(std::ceil(scene.run.end_time / dt - 1e-9)),
+               scene.run.end_time);
+  fmt::print("memory     {:.1f} MiB of solver state ({:.0f} bytes per tet)\n",
+             be->device_bytes() / 1048576.0,
+             model.n_tets() ? static_cast<double>(be->device_bytes()) / model.n_tets() : 0.0);
+}
+
+void export_meshes(const Scene& scene, const std::filesystem::path& dir) {
+  const Model model = build_model(scene);
+  std::filesystem::create_directories(dir);
+  for (const auto& b : model.bodies) {
+    TetMesh m;
+    m.points.assign(model.X.begin() + b.v_begin, model.X.begin() + b.v_end);
+    for (std::int64_t t = b.t_begin; t < b.t_end; ++t) {
+      auto tv = model.tets[t];
+      for (auto& v : tv) v -= static_cast<std::int32_t>(b.v_begin);
+      m.tets.push_back(tv);
+    }
+    write_gmsh(dir / (b.name + ".msh"), m);
+    fmt::print("{}: {} vertices, {} tets -> {}\n", b.name, m.points.size(), m.tets.size(),
+               (dir / (b.name + ".msh")).string());
+  }
+}
+
+}  // namespace qdemsph

@@ -1,0 +1,51 @@
+// The host launch layer: for_each / reductions over an index range as OpenMP loops.
+// The CUDA twin is exec_cuda.cuh; stage code is written once against either.
+#pragma once
+
+#include <cstdint>
+
+#include "core/hd.hpp"
+#include "core/memory.hpp"
+
+namespace qdemsph {
+
+struct HostExec {
+  static constexpr Space space = Space::Host;
+};
+
+// Loops shorter than this run on one thread: a parallel region costs microseconds, more
+// than a small loop's work, and far more when the cores are shared.
+inline constexpr std::int64_t kMinParallel = 4096;
+
+template <class F>
+void for_each(HostExec, std::int64_t n, F f) {
+#pragma omp parallel for schedule(static) if (n >= kMinParallel)
+  for (std::int64_t i = 0; i < n; ++i) f(i);
+}
+
+// Sum of f(i) over [0, n). OpenMP's reduction order depends on the thread count only, so
+// results are reproducible run to run with a fixed thread count.
+template <class F>
+double reduce_sum(HostExec, std::int64_t n, F f) {
+  double s = 0;
+#pragma omp parallel for schedule(static) reduction(+ : s) if (n >= kMinParallel)
+  for (std::int64_t i = 0; i < n; ++i) s += f(i);
+  return s;
+}
+
+template <class F>
+double reduce_max(HostExec, std::int64_t n, F f, double init) {
+  double m = init;
+#pragma omp parallel for schedule(static) reduction(max : m) if (n >= kMinParallel)
+  for (std::int64_t i = 0; i < n; ++i) {
+    const double v = f(i);
+    m = v > m ? v : m;
+  }
+  return m;
+}
+
+}  // namespace qdemsph
+
+namespace qdemsph {
+inline void exec_sync(HostExec) {}
+}  // namespace qdemsph

@@ -1,0 +1,136 @@
+// Device-neutral memory: Buffer<T> owns an array in a memory space (host or CUDA device);
+// View<T> is the trivially copyable handle that kernels receive. Access intent is explicit:
+// View<const T> for read-only inputs, View<T> for outputs.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "core/hd.hpp"
+#include "core/vec.hpp"
+
+namespace qdemsph {
+
+enum class Space { Host, Cuda };
+
+// Implemented in memory.cpp (host) and memory_cuda.cu (device; a clear error without CUDA).
+void* space_alloc(Space s, std::size_t bytes);
+void space_free(Space s, void* p) noexcept;
+void space_copy(void* dst, Space dst_space, const void* src, Space src_space, std::size_t bytes);
+void space_zero(Space s, void* p, std::size_t bytes);
+bool cuda_available();
+
+template <class T>
+struct View {
+  T* p = nullptr;
+  std::int64_t n = 0;
+  QDEMSPH_HD T& operator[](std::int64_t i) const { return p[i]; }
+  QDEMSPH_HD std::int64_t size() const { return n; }
+};
+
+template <class T>
+class Buffer {
+  static_assert(std::is_trivially_copyable_v<T>);
+
+ public:
+  explicit Buffer(Space s = Space::Host) : space_(s) {}
+  Buffer(Space s, std::int64_t n) : space_(s) { resize(n); }
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+  Buffer(Buffer&& o) noexcept { swap(o); }
+  Buffer& operator=(Buffer&& o) noexcept {
+    swap(o);
+    return *this;
+  }
+  ~Buffer() { space_free(space_, p_); }
+
+  void swap(Buffer& o) noexcept {
+    std::swap(space_, o.space_);
+    std::swap(p_, o.p_);
+    std::swap(n_, o.n_);
+  }
+  // Discards the contents; the new array is zero-filled.
+  void resize(std::int64_t n) {
+    space_free(space_, p_);
+    p_ = nullptr;
+    n_ = n;
+    if (n > 0) {
+      p_ = static_cast<T*>(space_alloc(space_, sizeof(T) * n));
+      space_zero(space_, p_, sizeof(T) * n);
+    }
+  }
+  void assign(const std::vector<T>& host) {
+    if (static_cast<std::int64_t>(host.size()) != n_) resize(host.size());
+    if (n_ > 0) space_copy(p_, space_, host.data(), Space::Host, sizeof(T) * n_);
+  }
+  std::vector<T> to_host() const {
+    std::vector<T> h(n_);
+    if (n_ > 0) space_copy(h.data(), Space::Host, p_, space_, sizeof(T) * n_);
+    return h;
+  }
+  void zero() {
+    if (n_ > 0) space_zero(space_, p_, sizeof(T) * n_);
+  }
+  View<T> view() { return {p_, n_}; }
+  View<const T> view() const { return {p_, n_}; }
+  View<const T> cview() const { return {p_, n_}; }
+  std::int64_t size() const { return n_; }
+  Space space() const { return space_; }
+  std::size_t bytes() const { return sizeof(T) * n_; }
+
+ private:
+  Space space_ = Space::Host;
+  T* p_ = nullptr;
+  std::int64_t n_ = 0;
+};
+
+// A field of 3-vectors stored as three component arrays (SoA) so that consecutive threads
+// read consecutive doubles.
+template <class D>
+struct Vec3ViewT {
+  D* x = nullptr;
+  D* y = nullptr;
+  D* z = nullptr;
+  std::int64_t n = 0;
+  QDEMSPH_HD Vec3 operator[](std::int64_t i) const { return {x[i], y[i], z[i]}; }
+  QDEMSPH_HD void set(std::int64_t i, Vec3 v) const {
+    x[i] = v.x;
+    y[i] = v.y;
+    z[i] = v.z;
+  }
+  QDEMSPH_HD std::int64_t size() const { return n; }
+};
+using Vec3View = Vec3ViewT<double>;
+using Vec3CView = Vec3ViewT<const double>;
+static_assert(std::is_trivially_copyable_v<Vec3View>);
+static_assert(std::is_trivially_copyable_v<View<double>>);
+
+class Vec3Buffer {
+ public:
+  explicit Vec3Buffer(Space s = Space::Host) : x_(s), y_(s), z_(s) {}
+  void resize(std::int64_t n) {
+    x_.resize(n);
+    y_.resize(n);
+    z_.resize(n);
+  }
+  void assign(const std::vector<Vec3>& h);
+  std::vector<Vec3> to_host() const;
+  void zero() {
+    x_.zero();
+    y_.zero();
+    z_.zero();
+  }
+  Vec3View view() { return {x_.view().p, y_.view().p, z_.view().p, x_.size()}; }
+  Vec3CView cview() const { return {x_.cview().p, y_.cview().p, z_.cview().p, x_.size()}; }
+  std::int64_t size() const { return x_.size(); }
+  std::size_t bytes() const { return 3 * x_.bytes(); }
+
+ private:
+  Buffer<double> x_, y_, z_;
+};
+
+}  // namespace qdemsph

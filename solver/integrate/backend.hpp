@@ -1,0 +1,62 @@
+// The interface between the host-side stepper and a compute backend (CPU or CUDA). A
+// backend owns the state in its memory space for the whole run; the host only sees what
+// download() returns. Each method is one stage; the stepper assembles a run from them.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/vec.hpp"
+#include "model/model.hpp"
+#include "physics/energies.hpp"
+
+namespace qdemsph {
+
+// Reductions a dynamic-relaxation step needs (over unconstrained free vertices).
+struct StaticStats {
+  double residual_max = 0;  // max |f|
+  double rayleigh_num = 0;  // -sum (f_int . u): u^T K u for a linear law
+  double rayleigh_den = 0;  // sum m |u|^2
+};
+
+struct HostFields {
+  std::vector<Vec3> x, v;
+  std::vector<std::array<double, 6>> stress;  // Cauchy: xx, yy, zz, yz, xz, xy
+  std::vector<double> von_mises;
+};
+
+class Backend {
+ public:
+  virtual ~Backend() = default;
+  virtual std::string name() const = 0;
+  virtual void upload(const Model& model) = 0;
+  // Selects the dead loads: the preload set (initial static solve) or the run's.
+  virtual void use_preload(bool on) = 0;
+  // f = element forces + dead loads + m g - alpha m v on free vertices; accumulates the
+  // dissipated energy of this step (dt_dissipation = 0: none, as in dynamic relaxation).
+  virtual void compute_forces(double dt_dissipation, double mass_damping) = 0;
+  virtual void kick(double h) = 0;   // v += h f / m
+  virtual void drift(double h) = 0;  // x += h v
+  // Dynamic relaxation: v = ((1 - c dt/2) v + dt f/m) / (1 + c dt/2), then x += dt v.
+  virtual void damped_step(double dt, double c) = 0;
+  virtual void zero_velocity() = 0;
+  virtual StaticStats static_stats() = 0;
+  virtual Energies energies() = 0;
+  // -1 when all positions/velocities are finite, else the first offending vertex found.
+  virtual std::int64_t find_non_finite() = 0;
+  // -1, or a tet whose det F <= 0 in the last compute_forces (clears the flag).
+  virtual std::int64_t take_inverted_tet() = 0;
+  virtual HostFields download(bool with_stress) = 0;
+  virtual void sync() = 0;
+  virtual std::size_t device_bytes() const = 0;
+};
+
+// "cpu" (OpenMP) or "cuda"; throws InputError for an unknown or unavailable backend.
+std::unique_ptr<Backend> make_backend(const std::string& name);
+std::unique_ptr<Backend> make_host_backend();
+std::unique_ptr<Backend> make_cuda_backend();  // memory_cuda/backend_cuda.cu, or throws
+
+}  // namespace qdemsph

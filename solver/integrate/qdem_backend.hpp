@@ -1,0 +1,296 @@
+// QDEM stages written once over an execution space (HostExec or CudaExec): the launch
+// layer (for_each / reduce_*) decides where the loops run. Instantiated in
+// backend_host.cpp and backend_cuda.cu.
+//
+// Data layout (SoA, n = count): vertex fields are Vec3 buffers (x, y, z arrays); tet
+// connectivity tv[k * nt + t]; dX^-1 entries dxi[(3 r + c) * nt + t]; per-tet corner forces
+// tf[k * nt + t]. Forces reach vertices by a gather over a vertex->corner CSR list rather
+// than atomics, so the sum order is fixed: results are deterministic on every backend.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error_flag.hpp"
+#include "core/memory.hpp"
+#include "integrate/backend.hpp"
+#include "physics/element.hpp"
+
+namespace qdemsph {
+
+template <class Exec>
+class QdemBackend final : public Backend {
+  static constexpr Space S = Exec::space;
+
+ public:
+  explicit QdemBackend(std::string name) : name_(std::move(name)) {}
+  std::string name() const override { return name_; }
+
+  void upload(const Model& m) override {
+    nv_ = m.n_vertices();
+    nt_ = m.n_tets();
+    nfv_ = m.n_free_vertices;
+    nft_ = m.n_free_tets;
+    gravity_ = m.gravity;
+    X_.assign(m.X);
+    x_.assign(m.x);
+    v_.assign(m.v);
+    f_.resize(nv_);
+    fext_.assign(m.fext);
+    fpre_.assign(m.fpre);
+    mass_.assign(m.mass);
+    inv_mass_.assign(m.inv_mass);
+    diss_v_.resize(nv_);
+    std::vector<std::int32_t> tv(4 * nt_);
+    std::vector<double> dxi(9 * nt_);
+    for (std::int64_t t = 0; t < nt_; ++t) {
+      for (int k = 0; k < 4; ++k) tv[k * nt_ + t] = m.tets[t][k];
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) dxi[(3 * r + c) * nt_ + t] = m.dX_inv[t].m[r][c];
+    }
+    tv_.assign(tv);
+    dxi_.assign(dxi);
+    vol0_.assign(m.vol0);
+    tmat_.assign(m.tet_material);
+    mats_.assign(m.materials);
+    tf_.resize(4 * nt_);
+    diss_t_.resize(nt_);
+    // Vertex -> (corner k, tet t) list, entries k * nt + t, in increasing order.
+    std::vector<std::int64_t> off(nv_ + 1, 0);
+    for (std::int64_t t = 0; t < nft_; ++t)
+      for (int k = 0; k < 4; ++k) ++off[m.tets[t][k] + 1];
+    for (std::int64_t i = 0; i < nv_; ++i) off[i + 1] += off[i];
+    std::vector<std::int64_t> ent(off[nv_]), fill(off.begin(), off.end() - 1);
+    for (int k = 0; k < 4; ++k)
+      for (std::int64_t t = 0; t < nft_; ++t) ent[fill[m.tets[t][k]]++] = k * nt_ + t;
+    for (std::int64_t i = 0; i < nv_; ++i) std::sort(ent.begin() + off[i], ent.begin() + off[i + 1]);
+    csr_off_.assign(off);
+    csr_ent_.assign(ent);
+    flag_.resize(1);
+  }
+
+  void use_preload(bool on) override { preload_ = on; }
+
+  void compute_forces(double dt_diss, double alpha) override {
+    const std::int64_t nt = nt_;
+    const auto x = x_.cview(), v = v_.cview();
+    const auto tv = tv_.cview();
+    const auto dxi = dxi_.cview();
+    const auto vol0 = vol0_.cview();
+    const auto tmat = tmat_.cview();
+    const auto mats = mats_.cview();
+    const auto tf = tf_.view();
+    const auto diss_t = diss_t_.view();
+    unsigned long long* flag = flag_.view().p;
+    for_each(Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) {
+      Vec3 xs[4], vs[4];
+      for (int k = 0; k < 4; ++k) {
+        const std::int32_t i = tv[k * nt + t];
+        xs[k] = x[i];
+        vs[k] = v[i];
+      }
+      Mat3 Xi;
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) Xi.m[r][c] = dxi[(3 * r + c) * nt + t];
+      const ElementForces e = tet_forces(mats[tmat[t]], xs, vs, Xi, vol0[t]);
+      if (!(det(e.F) > 0)) raise_flag(flag, t);
+      for (int k = 0; k < 4; ++k) tf.set(k * nt + t, e.f[k]);
+      if (dt_diss > 0) diss_t[t] += dt_diss * vol0[t] * e.stress.dissipation;
+    });
+    const auto off = csr_off_.cview();
+    const auto ent = csr_ent_.cview();
+    const auto fext = (preload_ ? fpre_ : fext_).cview();
+    const auto mass = mass_.cview();
+    const auto f = f_.view();
+    const auto diss_v = diss_v_.view();
+    const Vec3 g = gravity_;
+    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+      Vec3 s = fext[i] + mass[i] * g;
+      for (std::int64_t j = off[i]; j < off[i + 1]; ++j) s += tf[ent[j]];
+      if (alpha > 0) {
+        const Vec3 vi = v[i];
+        s -= (alpha * mass[i]) * vi;
+        if (dt_diss > 0) diss_v[i] += dt_diss * alpha * mass[i] * norm2(vi);
+      }
+      f.set(i, s);
+    });
+  }
+
+  void kick(double h) override {
+    const auto f = f_.cview();
+    const auto im = inv_mass_.cview();
+    const auto v = v_.view();
+    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+      if (im[i] > 0) v.set(i, v[i] + (h * im[i]) * f[i]);
+    });
+  }
+
+  void drift(double h) override {
+    const auto v = v_.cview();
+    const auto x = x_.view();
+    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { x.set(i, x[i] + h * v[i]); });
+  }
+
+  void damped_step(double dt, double c) override {
+    const auto f = f_.cview();
+    const auto im = inv_mass_.cview();
+    const auto v = v_.view();
+    const auto x = x_.view();
+    const double a = (1 - 0.5 * c * dt) / (1 + 0.5 * c * dt), b = dt / (1 + 0.5 * c * dt);
+    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+      if (im[i] > 0) {
+        const Vec3 vi = a * v[i] + (b * im[i]) * f[i];
+        v.set(i, vi);
+        x.set(i, x[i] + dt * vi);
+      }
+    });
+  }
+
+  void zero_velocity() override {
+    const auto im = inv_mass_.cview();
+    const auto v = v_.view();
+    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+      if (im[i] > 0) v.set(i, Vec3{});
+    });
+  }
+
+  StaticStats static_stats() override {
+    const auto f = f_.cview(), x = x_.cview(), X = X_.cview();
+    const auto fext = (preload_ ? fpre_ : fext_).cview();
+    const auto im = inv_mass_.cview(), mass = mass_.cview();
+    const Vec3 g = gravity_;
+    StaticStats s;
+    s.residual_max = reduce_max(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return im[i] > 0 ? norm(f[i]) : 0.0; },
+        0.0);
+    s.rayleigh_num = reduce_sum(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+      if (!(im[i] > 0)) return 0.0;
+      const Vec3 fint = f[i] - fext[i] - mass[i] * g;
+      return -dot(fint, x[i] - X[i]);
+    });
+    s.rayleigh_den = reduce_sum(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+      return im[i] > 0 ? mass[i] * norm2(x[i] - X[i]) : 0.0;
+    });
+    return s;
+  }
+
+  Energies energies() override {
+    const std::int64_t nt = nt_;
+    const auto x = x_.cview(), v = v_.cview(), X = X_.cview();
+    const auto fext = fext_.cview();
+    const auto mass = mass_.cview();
+    const auto tv = tv_.cview();
+    const auto dxi = dxi_.cview();
+    const auto vol0 = vol0_.cview();
+    const auto tmat = tmat_.cview();
+    const auto mats = mats_.cview();
+    const auto diss_t = diss_t_.cview(), diss_v = diss_v_.cview();
+    const Vec3 g = gravity_;
+    Energies e;
+    e.kinetic = reduce_sum(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+      return 0.5 * mass[i] * norm2(v[i]);
+    });
+    e.potential = reduce_sum(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+      return -dot(mass[i] * g + fext[i], x[i] - X[i]);
+    });
+    e.strain = reduce_sum(Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) {
+      Vec3 xs[4];
+      for (int k = 0; k < 4; ++k) xs[k] = x[tv[k * nt + t]];
+      Mat3 Xi;
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) Xi.m[r][c] = dxi[(3 * r + c) * nt + t];
+      const Mat3 F = edge_matrix(xs) * Xi;
+      return vol0[t] * material_stress(mats[tmat[t]], F, Mat3{}).energy_density;
+    });
+    e.dissipated = reduce_sum(Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) { return diss_t[t]; }) +
+                   reduce_sum(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return diss_v[i]; });
+    return e;
+  }
+
+  std::int64_t find_non_finite() override {
+    const auto x = x_.cview(), v = v_.cview();
+    const double m = reduce_max(
+        Exec{}, nfv_,
+        QDEMSPH_LAMBDA(std::int64_t i) {
+          const double s = x.x[i] + x.y[i] + x.z[i] + v.x[i] + v.y[i] + v.z[i];
+          return is_finite(s) ? 0.0 : static_cast<double>(i + 1);
+        },
+        0.0);
+    return static_cast<std::int64_t>(m) - 1;
+  }
+
+  std::int64_t take_inverted_tet() override {
+    const unsigned long long f = flag_.to_host()[0];
+    if (f == 0) return -1;
+    flag_.zero();
+    return static_cast<std::int64_t>(f) - 1;
+  }
+
+  HostFields download(bool with_stress) override {
+    HostFields h;
+    h.x = x_.to_host();
+    h.v = v_.to_host();
+    if (!with_stress) return h;
+    const std::int64_t nt = nt_;
+    Buffer<double> out(S, 7 * nt);
+    const auto o = out.view();
+    const auto x = x_.cview();
+    const auto v = v_.cview();
+    const auto tv = tv_.cview();
+    const auto dxi = dxi_.cview();
+    const auto vol0 = vol0_.cview();
+    const auto tmat = tmat_.cview();
+    const auto mats = mats_.cview();
+    for_each(Exec{}, nt_, QDEMSPH_LAMBDA(std::int64_t t) {
+      Vec3 xs[4], vs[4];
+      for (int k = 0; k < 4; ++k) {
+        xs[k] = x[tv[k * nt + t]];
+        vs[k] = v[tv[k * nt + t]];
+      }
+      Mat3 Xi;
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) Xi.m[r][c] = dxi[(3 * r + c) * nt + t];
+      const Material mat = mats[tmat[t]];
+      const ElementForces e = tet_forces(mat, xs, vs, Xi, vol0[t]);
+      const Mat3 s = cauchy_stress(mat, e.stress.P, e.F);
+      o[0 * nt + t] = s.m[0][0];
+      o[1 * nt + t] = s.m[1][1];
+      o[2 * nt + t] = s.m[2][2];
+      o[3 * nt + t] = s.m[1][2];
+      o[4 * nt + t] = s.m[0][2];
+      o[5 * nt + t] = s.m[0][1];
+      o[6 * nt + t] = von_mises(s);
+    });
+    const std::vector<double> hs = out.to_host();
+    h.stress.resize(nt);
+    h.von_mises.resize(nt);
+    for (std::int64_t t = 0; t < nt; ++t) {
+      for (int c = 0; c < 6; ++c) h.stress[t][c] = hs[c * nt + t];
+      h.von_mises[t] = hs[6 * nt + t];
+    }
+    return h;
+  }
+
+  void sync() override { exec_sync(Exec{}); }
+
+  std::size_t device_bytes() const override {
+    return X_.bytes() + x_.bytes() + v_.bytes() + f_.bytes() + fext_.bytes() + fpre_.bytes() +
+           mass_.bytes() + inv_mass_.bytes() + diss_v_.bytes() + tv_.bytes() + dxi_.bytes() +
+           vol0_.bytes() + tmat_.bytes() + tf_.bytes() + diss_t_.bytes() + csr_off_.bytes() +
+           csr_ent_.bytes();
+  }
+
+ private:
+  std::string name_;
+  std::int64_t nv_ = 0, nt_ = 0, nfv_ = 0, nft_ = 0;
+  Vec3 gravity_;
+  bool preload_ = false;
+  Vec3Buffer X_{S}, x_{S}, v_{S}, f_{S}, fext_{S}, fpre_{S}, tf_{S};
+  Buffer<double> mass_{S}, inv_mass_{S}, diss_v_{S}, dxi_{S}, vol0_{S}, diss_t_{S};
+  Buffer<std::int32_t> tv_{S}, tmat_{S};
+  Buffer<Material> mats_{S};
+  Buffer<std::int64_t> csr_off_{S}, csr_ent_{S};
+  Buffer<unsigned long long> flag_{S};
+};
+
+}  // namespace qdemsph

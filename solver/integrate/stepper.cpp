@@ -1,0 +1,129 @@
+#include "integrate/stepper.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace qdemsph {
+
+namespace {
+const BodyRange& body_of_tet(const Model& m, std::int64_t t) {
+  for (const auto& b : m.bodies)
+    if (t >= b.t_begin && t < b.t_end) return b;
+  return m.bodies.back();
+}
+}  // namespace
+
+std::string describe_vertex(const Model& m, std::int64_t i) {
+  const BodyRange& b = m.bodies[m.body[i]];
+  const Vec3 X = m.X[i];
+  return fmt::format("vertex {} of body '{}' (reference position {:.4g}, {:.4g}, {:.4g})",
+                     i - b.v_begin, b.name, X.x, X.y, X.z);
+}
+
+std::string describe_tet(const Model& m, std::int64_t t) {
+  const BodyRange& b = body_of_tet(m, t);
+  return fmt::format("tet {} of body '{}'", t - b.t_begin, b.name);
+}
+
+double choose_dt(const Model& model, std::optional<double> fixed_dt, double safety) {
+  if (model.dt_critical_tet < 0) return fixed_dt.value_or(1e-3);  // only fixed bodies
+  if (fixed_dt) {
+    if (*fixed_dt > model.dt_critical)
+      throw InputError(fmt::format(
+          "run.dt = {:.4e} s exceeds the stability limit {:.4e} s (smallest altitude / P-wave "
+          "speed, set by {}); use a smaller dt or leave it out to use {} x the limit",
+          *fixed_dt, model.dt_critical, describe_tet(model, model.dt_critical_tet), safety));
+    return *fixed_dt;
+  }
+  return safety * model.dt_critical;
+}
+
+Stepper::Stepper(const Model& model, Backend& backend, double dt, int check_every)
+    : model_(model),
+      be_(backend),
+      dt_(dt),
+      check_every_(std::max(1, check_every)),
+      timers_([&backend] { backend.sync(); }) {
+  be_.compute_forces(0.0, model_.mass_damping);
+  check();
+}
+
+void Stepper::step() {
+  {
+    auto s = timers_.scope("integration");
+    be_.kick(0.5 * dt_);
+    be_.drift(dt_);
+  }
+  {
+    auto s = timers_.scope("elements");
+    be_.compute_forces(dt_, model_.mass_damping);
+  }
+  {
+    auto s = timers_.scope("integration");
+    be_.kick(0.5 * dt_);
+  }
+  t_ += dt_;
+  ++n_;
+  if (n_ % check_every_ == 0) check();
+}
+
+void Stepper::check() const {
+  auto scope = timers_.scope("checks");
+  const std::int64_t t = be_.take_inverted_tet();
+  if (t >= 0)
+    throw SimulationError(fmt::format(
+        "step {} (t = {:.6e} s): {} inverted (det F <= 0); the body was crushed or the run is "
+        "unstable (dt = {:.3e} s, stability limit {:.3e} s)",
+        n_, t_, describe_tet(model_, t), dt_, model_.dt_critical));
+  const std::int64_t v = be_.find_non_finite();
+  if (v >= 0)
+    throw SimulationError(
+        fmt::format("step {} (t = {:.6e} s): non-finite position or velocity at {} (dt = {:.3e} "
+                    "s, stability limit {:.3e} s)",
+                    n_, t_, describe_vertex(model_, v), dt_, model_.dt_critical));
+}
+
+RelaxResult Stepper::relax(double tolerance, std::int64_t max_steps, bool preload,
+                           const std::function<void(std::int64_t, double)>& progress) {
+  auto scope = timers_.scope("relaxation");
+  // Pseudo-time: only the end state matters, so step close to the stability limit.
+  const double h = model_.dt_critical_tet >= 0 ? 0.9 * model_.dt_critical : dt_;
+  RelaxResult r;
+  const std::vector<Vec3>& loads = preload ? model_.fpre : model_.fext;
+  for (std::int64_t i = 0; i < model_.n_free_vertices; ++i)
+    if (model_.inv_mass[i] > 0)
+      r.reference = std::max(r.reference, norm(loads[i] + model_.mass[i] * model_.gravity));
+  be_.use_preload(preload);
+  be_.zero_velocity();
+  be_.compute_forces(0.0, 0.0);
+  if (r.reference == 0) {
+    r.converged = true;
+  } else {
+    for (; r.iterations < max_steps; ++r.iterations) {
+      const StaticStats s = be_.static_stats();
+      r.residual = s.residual_max / r.reference;
+      if (r.residual <= tolerance) {
+        r.converged = true;
+        break;
+      }
+      // Critical damping of the lowest mode, omega^2 ~ u^T K u / u^T M u.
+      const double w2 = s.rayleigh_den > 0 ? std::max(s.rayleigh_num / s.rayleigh_den, 0.0) : 0.0;
+      const double c = std::min(2.0 * std::sqrt(w2), 1.0 / h);
+      be_.damped_step(h, c);
+      be_.compute_forces(0.0, 0.0);
+      if ((r.iterations + 1) % (10 * check_every_) == 0) check();
+      if (progress && r.iterations % 1000 == 0) progress(r.iterations, r.residual);
+    }
+  }
+  be_.zero_velocity();
+  be_.use_preload(false);
+  be_.compute_forces(0.0, model_.mass_damping);
+  check();
+  return r;
+}
+
+}  // namespace qdemsph

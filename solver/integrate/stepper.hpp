@@ -1,0 +1,61 @@
+// Time integration on top of a Backend: explicit velocity Verlet for dynamics and
+// dynamic relaxation (critically damped by a Rayleigh-quotient estimate of the lowest
+// frequency, Underwood 1983) for statics. Run-time guards turn NaN and inverted tets into
+// a SimulationError naming the element, its body and the time.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+
+#include "core/timers.hpp"
+#include "integrate/backend.hpp"
+#include "model/model.hpp"
+
+namespace qdemsph {
+
+struct RelaxResult {
+  bool converged = false;
+  std::int64_t iterations = 0;
+  double residual = 0;   // max |f| / reference load at the end
+  double reference = 0;  // max |applied force| on a vertex [N]
+};
+
+class Stepper {
+ public:
+  // dt is used as given; callers check it against model.dt_critical (see choose_dt).
+  Stepper(const Model& model, Backend& backend, double dt, int check_every = 10);
+
+  // Velocity Verlet: v += dt/2 f/m; x += dt v; f = f(x, v); v += dt/2 f/m.
+  void step();
+  // Verifies positions/velocities are finite and no tet inverted; throws SimulationError.
+  void check() const;
+
+  // Dynamic relaxation to max |f| <= tolerance * max |applied force|. With preload, the
+  // preload set of dead loads is active during the solve and released afterwards.
+  RelaxResult relax(double tolerance, std::int64_t max_steps, bool preload,
+                    const std::function<void(std::int64_t, double)>& progress = {});
+
+  double time() const { return t_; }
+  std::int64_t steps() const { return n_; }
+  double dt() const { return dt_; }
+  PhaseTimers& timers() { return timers_; }
+
+ private:
+  const Model& model_;
+  Backend& be_;
+  double dt_;
+  int check_every_;
+  double t_ = 0;
+  std::int64_t n_ = 0;
+  mutable PhaseTimers timers_;
+};
+
+// The run's dt: the scene's fixed dt (InputError if above the stability limit) or
+// dt_safety times the limit.
+double choose_dt(const Model& model, std::optional<double> fixed_dt, double safety);
+
+// Where a vertex or tet lives, for messages: "vertex 12 of body 'beam'".
+std::string describe_vertex(const Model& m, std::int64_t i);
+std::string describe_tet(const Model& m, std::int64_t t);
+
+}  // namespace qdemsph

@@ -1,0 +1,234 @@
+#include "mesh/gmsh_io.hpp"
+
+#include <gmsh.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <memory>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "core/error.hpp"
+
+namespace qdemsph {
+
+// ---------------------------------------------------------------- GmshSession
+
+namespace {
+
+std::recursive_mutex g_gmsh_mutex;
+int g_gmsh_depth = 0;  // open sessions, guarded by g_gmsh_mutex
+
+}  // namespace
+
+GmshSession::GmshSession() : lock_(g_gmsh_mutex) {
+  if (g_gmsh_depth == 0) {
+    gmsh::initialize(0, nullptr, /*readConfigFiles=*/false);
+    owner_ = true;
+    gmsh::option::setNumber("General.Terminal", 0);
+    gmsh::option::setNumber("General.Verbosity", 0);
+    // 2: errors throw an exception instead of aborting (the API default; set explicitly).
+    gmsh::option::setNumber("General.AbortOnError", 2);
+  }
+  ++g_gmsh_depth;
+}
+
+GmshSession::~GmshSession() {
+  --g_gmsh_depth;
+  if (owner_) gmsh::finalize();
+}
+
+// ---------------------------------------------------------------- read_gmsh
+
+namespace {
+
+// The path in single quotes. (Built with append: `"'" + std::string` trips GCC 12's -Wrestrict
+// false positive.)
+std::string quoted(const std::filesystem::path& p) {
+  std::string s(1, '\'');
+  s.append(p.string());
+  s.push_back('\'');
+  return s;
+}
+
+// Gmsh's last error message (non-printable bytes, e.g. from a binary file, shown as '?'), or
+// `fallback` when there is none.
+std::string gmsh_error(const std::string& fallback) {
+  std::string e;
+  try {
+    gmsh::logger::getLastError(e);
+  } catch (...) {
+  }
+  if (e.empty()) e = fallback;
+  for (char& c : e)
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+  return e;
+}
+
+std::string format_g(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", x);
+  return buf;
+}
+
+double signed_volume(const std::vector<Vec3>& p, const std::array<int32_t, 4>& t) {
+  const Vec3 x0 = p[t[0]];
+  return det(Mat3::from_columns(p[t[1]] - x0, p[t[2]] - x0, p[t[3]] - x0)) / 6.0;
+}
+
+}  // namespace
+
+TetMesh tet_mesh_from_gmsh(const std::vector<std::size_t>& node_tags,
+                           const std::vector<double>& coords,
+                           const std::vector<std::size_t>& elem_tags,
+                           const std::vector<std::size_t>& elem_nodes, const std::string& source) {
+  if (elem_tags.empty())
+    throw InputError(source + ": no linear tetrahedra (gmsh element type 4) found");
+  if (elem_nodes.size() != 4 * elem_tags.size() || coords.size() != 3 * node_tags.size())
+    throw InputError(source + ": inconsistent node/element data");
+
+  // Nodes sorted by tag; each tet vertex tag is looked up by binary search.
+  std::vector<std::pair<std::size_t, std::size_t>> by_tag(node_tags.size());  // (tag, position)
+  for (std::size_t i = 0; i < node_tags.size(); ++i) by_tag[i] = {node_tags[i], i};
+  std::sort(by_tag.begin(), by_tag.end());
+  auto position_of = [&](std::size_t tag, std::size_t elem) -> std::size_t {
+    auto it =
+        std::lower_bound(by_tag.begin(), by_tag.end(), std::pair<std::size_t, std::size_t>{tag, 0});
+    if (it == by_tag.end() || it->first != tag)
+      throw InputError(source + ": element " + std::to_string(elem) + " refers to missing node " +
+                       std::to_string(tag));
+    return static_cast<std::size_t>(it - by_tag.begin());
+  };
+
+  // Mark the used nodes (in sorted-tag order), then number them compactly in that order.
+  std::vector<std::size_t> sorted_pos(elem_nodes.size());
+  std::vector<int64_t> new_index(by_tag.size(), -1);
+  for (std::size_t k = 0; k < elem_nodes.size(); ++k) {
+    sorted_pos[k] = position_of(elem_nodes[k], elem_tags[k / 4]);
+    new_index[sorted_pos[k]] = 0;
+  }
+  int64_t n_used = 0;
+  for (auto& v : new_index)
+    if (v == 0) v = n_used++;
+  if (n_used > std::numeric_limits<int32_t>::max() ||
+      elem_tags.size() > static_cast<std::size_t>(std::numeric_limits<int32_t>::max()))
+    throw InputError(source + ": too large for 32-bit indices");
+
+  TetMesh mesh;
+  mesh.points.resize(n_used);
+  for (std::size_t s = 0; s < by_tag.size(); ++s)
+    if (new_index[s] >= 0) {
+      const std::size_t i = by_tag[s].second;
+      mesh.points[new_index[s]] = {coords[3 * i], coords[3 * i + 1], coords[3 * i + 2]};
+    }
+  mesh.tets.resize(elem_tags.size());
+  for (std::size_t e = 0; e < elem_tags.size(); ++e)
+    for (int q = 0; q < 4; ++q)
+      mesh.tets[e][q] = static_cast<int32_t>(new_index[sorted_pos[4 * e + q]]);
+
+  // Orientation and degeneracy.
+  std::vector<double> vol(mesh.tets.size());
+  double mean = 0.0;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+    vol[e] = signed_volume(mesh.points, mesh.tets[e]);
+    if (!std::isfinite(vol[e]))
+      throw InputError(source + ": element " + std::to_string(elem_tags[e]) +
+                       " has non-finite coordinates");
+    mean += std::abs(vol[e]);
+  }
+  mean /= static_cast<double>(mesh.tets.size());
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
+    if (!(std::abs(vol[e]) >= 1e-12 * mean) || mean == 0.0)
+      throw InputError(source + ": degenerate tetrahedron, element tag " +
+                       std::to_string(elem_tags[e]) + " (volume " + format_g(vol[e]) +
+                       ", mean volume " + format_g(mean) + ")");
+    if (vol[e] < 0) std::swap(mesh.tets[e][1], mesh.tets[e][2]);
+  }
+  return mesh;
+}
+
+TetMesh read_gmsh(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    throw InputError("mesh file " + quoted(path) + ": no such file");
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw InputError("mesh file " + quoted(path) + ": not a regular file");
+  if (std::FILE* f = std::fopen(path.c_str(), "rb"))
+    std::fclose(f);
+  else
+    throw InputError("mesh file " + quoted(path) + ": cannot be opened for reading");
+  if (std::filesystem::file_size(path, ec) == 0 && !ec)
+    throw InputError("mesh file " + quoted(path) + ": empty file");
+
+  std::vector<std::size_t> node_tags, elem_tags, elem_nodes;
+  std::vector<double> coords, param;
+  {
+    GmshSession session;
+    // Read into a model of our own and remove it afterwards: other models stay untouched.
+    auto fail = [&](const std::string& what) {
+      try {
+        gmsh::model::remove();
+      } catch (...) {
+      }
+      return InputError("mesh file " + quoted(path) +
+                        ": unreadable, truncated or corrupt (gmsh: " + gmsh_error(what) + ")");
+    };
+    try {
+      gmsh::model::add("qdemsph_read_gmsh");
+      gmsh::merge(path.string());
+      gmsh::model::mesh::getNodes(node_tags, coords, param, -1, -1, false, false);
+      gmsh::model::mesh::getElementsByType(4, elem_tags, elem_nodes);
+    } catch (const std::exception& e) {
+      throw fail(e.what());
+    } catch (...) {
+      throw fail("unknown error");
+    }
+    gmsh::model::remove();
+  }
+
+  return tet_mesh_from_gmsh(node_tags, coords, elem_tags, elem_nodes, "mesh file " + quoted(path));
+}
+
+// ---------------------------------------------------------------- write_gmsh
+
+void write_gmsh(const std::filesystem::path& path, const TetMesh& mesh) {
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "w"), &std::fclose);
+  if (!f) throw InputError("mesh file " + quoted(path) + ": cannot be opened for writing");
+  std::FILE* o = f.get();
+  const std::size_t n = mesh.points.size(), m = mesh.tets.size();
+
+  Vec3 lo{0, 0, 0}, hi{0, 0, 0};
+  if (n > 0) lo = hi = mesh.points[0];
+  for (const Vec3& p : mesh.points)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], p[d]);
+      hi[d] = std::max(hi[d], p[d]);
+    }
+
+  std::fprintf(o, "$MeshFormat\n4.1 0 %zu\n$EndMeshFormat\n", sizeof(std::size_t));
+  std::fprintf(o, "$PhysicalNames\n1\n3 1 \"body\"\n$EndPhysicalNames\n");
+  // numPoints numCurves numSurfaces numVolumes; then the volume: tag box, 1 physical tag (1),
+  // 0 bounding surfaces.
+  std::fprintf(o, "$Entities\n0 0 0 1\n1 %.17g %.17g %.17g %.17g %.17g %.17g 1 1 0\n$EndEntities\n",
+               lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
+  // numEntityBlocks numNodes minNodeTag maxNodeTag; block: entityDim entityTag parametric n.
+  std::fprintf(o, "$Nodes\n1 %zu %zu %zu\n3 1 0 %zu\n", n, n > 0 ? std::size_t{1} : 0, n, n);
+  for (std::size_t i = 0; i < n; ++i) std::fprintf(o, "%zu\n", i + 1);
+  for (const Vec3& p : mesh.points) std::fprintf(o, "%.17g %.17g %.17g\n", p.x, p.y, p.z);
+  std::fprintf(o, "$EndNodes\n");
+  // numEntityBlocks numElements minElementTag maxElementTag; block: dim tag type n.
+  std::fprintf(o, "$Elements\n1 %zu %zu %zu\n3 1 4 %zu\n", m, m > 0 ? std::size_t{1} : 0, m, m);
+  for (std::size_t e = 0; e < m; ++e) {
+    const auto& t = mesh.tets[e];
+    std::fprintf(o, "%zu %d %d %d %d\n", e + 1, t[0] + 1, t[1] + 1, t[2] + 1, t[3] + 1);
+  }
+  std::fprintf(o, "$EndElements\n");
+  if (std::ferror(o) || std::fflush(o) != 0)
+    throw InputError("mesh file " + quoted(path) + ": write failed");
+}
+
+}  // namespace qdemsph
