@@ -26,8 +26,9 @@ unit: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 verify: build
-	@$(PY) -m pytest verification -q $(if $(filter 1,$(FULL)),--full,) \
-	  --qdemsph $(BUILD)/bin/qdemsph --junitxml $(BUILD)/verify/junit.xml
+	@$(PY) -m pytest verification -q $(if $(filter 1,$(FULL)),--full,) --qdemsph $(BUILD)/bin/qdemsph \
+	  --verify-out $(BUILD)/verify --junitxml $(BUILD)/verify/junit.xml ; rc=$$? ; \
+	  $(PY) verification/report.py --out $(BUILD)/verify || rc=1 ; exit $$rc
 
 test: unit verify
 

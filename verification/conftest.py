@@ -1,7 +1,9 @@
 """pytest harness for qdemsph verification (run with Debian's /usr/bin/python3).
 
 Options: --full (long tier), --backend NAME (passed to `qdemsph run --backend NAME`),
---qdemsph PATH (default $QDEMSPH or build/bin/qdemsph), --verify-out DIR (default build/verify).
+--qdemsph PATH (default $QDEMSPH or build/bin/qdemsph), --verify-out DIR (default build/verify),
+--threads N (qdemsph CPU threads, default 1), --run-timeout SECONDS (per solver process,
+default 3600).
 
 Every test records its metrics through the `checks` fixture:
     checks.check(metric, value, kind=..., reference=..., tolerance=..., unit=..., wall_s=...)
@@ -43,6 +45,11 @@ def pytest_addoption(parser):
     g.addoption("--backend", default=None, help="qdemsph backend (sets run.backend); default: the solver's")
     g.addoption("--qdemsph", default=None, help="path to the qdemsph binary (default $QDEMSPH or build/bin/qdemsph)")
     g.addoption("--verify-out", default=None, help="output folder (default build/verify)")
+    g.addoption("--threads", type=int, default=1,
+                help="CPU threads per qdemsph run (run.threads; default 1, like the single-threaded "
+                     "FEniCSx references; 0 = the solver's default)")
+    g.addoption("--run-timeout", type=float, default=3600.0,
+                help="seconds one qdemsph or FEniCSx process may run before it counts as failed")
 
 
 def pytest_configure(config):
@@ -147,7 +154,9 @@ def qdemsph(request):
     binary = Path(binary)
     if not binary.is_absolute():
         binary = REPO / binary
-    return Qdemsph(binary, backend=request.config.getoption("--backend"))
+    return Qdemsph(binary, backend=request.config.getoption("--backend"),
+                   timeout_s=request.config.getoption("--run-timeout"),
+                   threads=request.config.getoption("--threads"))
 
 
 @pytest.fixture
@@ -175,6 +184,7 @@ def pytest_sessionfinish(session, exitstatus):
         "finished": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "tier": state["tier"], "pytest_exitstatus": int(exitstatus),
         "backend_option": session.config.getoption("--backend"),
+        "threads_option": session.config.getoption("--threads"),
         "qdemsph": str(session.config.getoption("--qdemsph") or os.environ.get("QDEMSPH") or DEFAULT_QDEMSPH),
         "machine": machine.describe(), "series": state["series"],
     }

@@ -5,7 +5,8 @@
   /usr/bin/python3 verification/report.py --accept      # make this run the new baseline
 
 Reads <out>/summary.json (records) and <out>/session.json (machine, tier, plot series) written
-by the pytest harness. The page holds the machine, every figure (matplotlib, embedded as
+by the pytest harness, plus any <out>/records/*.json (lists of records in the same schema,
+written by other tools, e.g. the solver's physics tests). The page holds the machine, every figure (matplotlib, embedded as
 base64 PNG), the regressions, and a table of every record with its change against the
 baseline. Exit status 1 on an accuracy regression (a checked metric that passed in the
 baseline and fails now, or fails by more than it did); failed checks without a baseline and
@@ -171,7 +172,7 @@ td,th{border:1px solid #ccc;padding:2px 6px;text-align:left} th{background:#eee}
 .pass{color:#070}.fail{color:#b00;font-weight:bold}.REGRESSION{background:#fbb;font-weight:bold}
 .changed,.worse{background:#ffd}.improved{background:#dfd}.slower{background:#fdb}.faster{background:#cfc}
 .new{background:#def}.missing{color:#888}.box{border:1px solid #ccc;padding:.5em 1em;margin:.5em 0;display:inline-block}
-img{max-width:100%;border:1px solid #ddd;margin:4px}"""
+img{width:calc(50% - 24px);min-width:480px;border:1px solid #ddd;margin:4px}"""
 
 
 def build_html(records, session, baseline, rows, regressions, missing, figs):
@@ -257,6 +258,17 @@ def main(argv=None):
     if not spath.exists():
         sys.exit(f"{spath} not found: run the verification first (make verify)")
     records = json.loads(spath.read_text())
+    # Records from outside pytest (e.g. the solver's own physics tests) in the same schema.
+    for extra in sorted((out / "records").glob("*.json")):
+        try:
+            more = json.loads(extra.read_text())
+        except json.JSONDecodeError as e:
+            sys.exit(f"{extra}: not JSON ({e})")
+        if not isinstance(more, list) or not all(isinstance(r, dict) and "case" in r and "metric" in r for r in more):
+            sys.exit(f"{extra}: expected a list of records with at least 'case' and 'metric'")
+        for r in more:
+            r.setdefault("source", extra.name)
+        records += more
     sess_path = out / "session.json"
     session = json.loads(sess_path.read_text()) if sess_path.exists() else {}
     if args.accept:

@@ -7,6 +7,7 @@
 
 #include "app/run_scene.hpp"
 #include "core/error.hpp"
+#include "core/gpu_info.hpp"
 #include "core/memory.hpp"
 #include "io/scene_yaml.hpp"
 
@@ -44,8 +45,12 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (version->parsed()) {
-      fmt::print("qdemsph 0.1.0 (double precision; backends: cpu{})\n",
-                 cuda_available() ? ", cuda" : "");
+#ifdef QDEMSPH_HAVE_CUDA
+      fmt::print("qdemsph 0.1.0 (double precision; backends: cpu, cuda)\ngpu: {}\n",
+                 gpu_summary(gpu_info()));
+#else
+      fmt::print("qdemsph 0.1.0 (double precision; backends: cpu)\n");
+#endif
       return 0;
     }
     const Scene scene = load_scene(scene_file, overrides);

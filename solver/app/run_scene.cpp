@@ -4,17 +4,22 @@
 #include <omp.h>
 
 #include <chrono>
+#include <cstdio>
+#include <optional>
 #include <cmath>
 
 #include "core/error.hpp"
+#include "core/gpu_info.hpp"
 #include "core/progress.hpp"
 #include "integrate/backend.hpp"
 #include "integrate/stepper.hpp"
 #include "io/fields_h5.hpp"
+#include "io/fluid_h5.hpp"
 #include "io/json.hpp"
 #include "io/probes_csv.hpp"
 #include "mesh/gmsh_io.hpp"
 #include "model/model.hpp"
+#include "sph/fluid_stage.hpp"
 
 namespace qdemsph {
 namespace {
@@ -85,16 +90,24 @@ Json relax_json(const RelaxResult& r) {
   return j;
 }
 
-std::string stages_of(const Model& model) {
+std::string stages_of(const Model& model, const FluidSetup* fluid) {
   const std::size_t free_bodies =
       std::count_if(model.bodies.begin(), model.bodies.end(), [](auto& b) { return !b.fixed; });
   std::string s = fmt::format("elements ({} free tets), integration ({} free vertices)",
                               model.n_free_tets, model.n_free_vertices);
-  s += model.bodies.size() > 1 && free_bodies > 0
-           ? "; contact: not built yet (scene has several bodies, they will pass through each other)"
-           : "; no contact: one body";
-  s += "; no SPH: no fluid";
+  (void)free_bodies;
+  s += "; " + describe_contact(model);
+  s += fluid ? "; " + describe_fluid(*fluid) : "; no SPH: no fluid";
   return s;
+}
+
+// The fluid's stable dt at the start: CFL with c0 and the free-fall speed sqrt(2 g H), the
+// force limit with g, the viscous limit (sph_timestep.hpp).
+double fluid_dt(const FluidSetup& f) {
+  const double g = norm(f.params.gravity);
+  return sph_dt_limits(f.params.kernel.h, f.params.eos.c0, std::sqrt(2.0 * g * f.height), g,
+                       f.params.nu)
+      .min();
 }
 
 }  // namespace
@@ -106,7 +119,19 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   const std::string backend_name = opt.backend.value_or(scene.run.backend);
   auto be = make_backend(backend_name);
   be->upload(model);
-  const double dt = choose_dt(model, scene.run.dt, scene.run.dt_safety);
+  double dt = choose_dt(model, scene.run.dt, scene.run.dt_safety);
+  std::optional<FluidSetup> fluid_setup;
+  std::unique_ptr<FluidStage> fluid;
+  if (scene.fluid.present) {
+    fluid_setup = build_fluid(scene.fluid, scene.gravity);
+    const double dtf = fluid_dt(*fluid_setup);
+    if (scene.run.dt && *scene.run.dt > dtf)
+      throw InputError(fmt::format("run.dt = {:.4e} s exceeds the fluid's time-step limit {:.4e} s "
+                                   "(CFL with c0 = {:.4g} m/s)",
+                                   *scene.run.dt, dtf, fluid_setup->params.eos.c0));
+    if (!scene.run.dt) dt = model.dt_critical_tet >= 0 ? std::min(dt, dtf) : dtf;
+    fluid = make_fluid_stage(backend_name, *fluid_setup);
+  }
   const std::filesystem::path dir = opt.out.value_or(scene.output.dir);
   const auto probes = resolve_probes(scene, model);
   std::vector<std::string> names;
@@ -116,6 +141,15 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   ProbeWriter probe_csv(dir, names);
   Stepper st(model, *be, dt);
   PhaseTimers& timers = st.timers();
+  std::optional<FluidWriter> fluid_out;
+  std::FILE* fluid_csv = nullptr;
+  if (fluid) {
+    st.attach_fluid(fluid.get());
+    fluid_out.emplace(dir);
+    fluid_csv = std::fopen((dir / "fluid.csv").c_str(), "w");
+    if (!fluid_csv) throw InputError("cannot create '" + (dir / "fluid.csv").string() + "'");
+    std::fputs("time,kinetic,px,py,pz,v_max,rho_dev,x_max,y_max,dt_limit\n", fluid_csv);
+  }
 
   Json summary = Json::object();
   summary["scene"] = scene.file.string();
@@ -129,31 +163,86 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   summary["n_free_tets"] = model.n_free_tets;
   summary["dt"] = dt;
   summary["dt_critical"] = model.dt_critical;
-  summary["stages"] = stages_of(model);
+  summary["stages"] = stages_of(model, fluid_setup ? &*fluid_setup : nullptr);
+  if (fluid) {
+    const SphParams& P = fluid->params();
+    Json fj = Json::object();
+    fj["n_fluid"] = fluid->n_fluid();
+    fj["n_wall"] = fluid->size() - fluid->n_fluid();
+    fj["spacing"] = fluid_setup->dx;
+    fj["h"] = P.kernel.h;
+    fj["c0"] = P.eos.c0;
+    fj["rho0"] = P.eos.rho0;
+    fj["dt_limit"] = fluid_dt(*fluid_setup);
+    fj["device_bytes"] = fluid->device_bytes();
+    summary["fluid"] = fj;
+  }
   summary["device_bytes"] = be->device_bytes();
 
   auto write_fields = [&](bool stress) {
     auto scope = timers.scope("output");
     const HostFields h = be->download(stress);
     fields.write(st.time(), st.steps(), h.x, h.v, h.stress, h.von_mises);
+    if (fluid) {
+      const FluidHost fh = fluid->download();
+      fluid_out->write(st.time(), st.steps(), fh.x, fh.v, fh.p, fh.rho, fh.type, fh.gid);
+    }
   };
   auto write_probes = [&] {
     auto scope = timers.scope("output");
     const HostFields h = be->download(false);
     probe_csv.write(st.time(), evaluate_probes(probes, model, h.x), be->energies());
+    if (fluid) {
+      const FluidStats fs = fluid->stats();
+      const FluidHost fh = fluid->download();
+      double xm = -1e300, ym = -1e300;
+      for (std::size_t i = 0; i < fh.x.size(); ++i)
+        if (fh.type[i] == kSphFluid) xm = std::max(xm, fh.x[i].x), ym = std::max(ym, fh.x[i].y);
+      fmt::print(fluid_csv, "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.6g}\n",
+                 st.time(), fs.kinetic, fs.momentum.x, fs.momentum.y, fs.momentum.z, fs.v_max,
+                 fs.rho_dev, xm, ym, fluid->dt_limits().min());
+      std::fflush(fluid_csv);
+    }
   };
-  auto finish = [&](const std::string& status) {
+  auto finish = [&](const std::string& status, std::int64_t steps) {
     summary["status"] = status;
-    summary["steps"] = st.steps();
+    summary["steps"] = steps;
     summary["sim_time"] = st.time();
     summary["energies"] = energies_json(be->energies());
     Json phases = Json::object();
     for (const auto& [k, v] : timers.seconds()) phases[k] = v;
+    // Contact runs inside the force evaluation: report it as phase "contact" (and its
+    // sub-phases contact.broad / contact.narrow / contact.force), taken out of "elements".
+    double contact_s = 0;
+    for (const auto& [k, v] : be->stage_seconds()) {
+      phases[k] = v;
+      if (k.rfind("contact.", 0) == 0) contact_s += v;
+    }
+    if (model.contact.enabled) {
+      phases["contact"] = contact_s;
+      if (timers.seconds().count("elements"))
+        phases["elements"] = timers.seconds().at("elements") - contact_s;
+      Json cj = Json::object();
+      for (const auto& [k, v] : be->contact_stats()) cj[k] = v;
+      cj["d_dem"] = model.contact.d_dem;
+      cj["broad_phase"] = broad_phase_name(model.contact.mode);
+      cj["primitives"] = static_cast<std::int64_t>(model.contact.prim_v.size());
+      cj["surface_tets"] = model.contact.n_surface_tets;
+      cj["surface_triangles"] = static_cast<std::int64_t>(model.contact.tri_v.size());
+      summary["contact"] = cj;
+    }
     summary["phases"] = phases;
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     summary["wall_s"] = wall;
-    summary["steps_per_s"] = st.steps() > 0 ? st.steps() / wall : 0.0;
+    summary["steps_per_s"] = steps > 0 ? steps / wall : 0.0;
+    if (fluid) {
+      const auto it = timers.seconds().find("sph");
+      const double sph_s = it == timers.seconds().end() ? 0.0 : it->second;
+      summary["fluid"]["particle_steps_per_s"] =
+          sph_s > 0 ? static_cast<double>(fluid->size()) * st.steps() / sph_s : 0.0;
+      if (fluid_csv) std::fclose(fluid_csv), fluid_csv = nullptr;
+    }
     summary.write_file(dir / "summary.json");
   };
 
@@ -184,7 +273,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
         fmt::print("static solve converged: residual {:.3e} after {} steps\n", r.residual,
                    r.iterations);
       }
-      finish(r.converged ? "converged" : "not_converged");
+      finish(r.converged ? "converged" : "not_converged", r.iterations);
       return code;
     }
     if (preload) {
@@ -220,7 +309,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     st.check();
     progress.finish();
     write_fields(true);
-    finish("completed");
+    finish("completed", st.steps());
   } catch (const SimulationError& e) {
     progress.finish();
     summary["error"] = e.what();
@@ -228,7 +317,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       write_fields(true);  // final diagnostic snapshot
     } catch (...) {
     }
-    finish("failed");
+    finish("failed", st.steps());
     throw;
   }
   if (!opt.quiet)
@@ -246,7 +335,9 @@ void print_info(const Scene& scene) {
   const double dt = choose_dt(model, scene.run.dt, scene.run.dt_safety);
   fmt::print("scene      {}\n", scene.file.string());
   fmt::print("mode       {}\n", scene.run.mode == RunMode::Static ? "static" : "dynamic");
-  fmt::print("stages     {}\n", stages_of(model));
+  std::optional<FluidSetup> fluid_setup;
+  if (scene.fluid.present) fluid_setup = build_fluid(scene.fluid, scene.gravity);
+  fmt::print("stages     {}\n", stages_of(model, fluid_setup ? &*fluid_setup : nullptr));
   fmt::print("bodies     {}\n", model.bodies.size());
   for (const auto& b : model.bodies)
     fmt::print("  {:<16} {:>9} vertices {:>10} tets{}\n", b.name, b.v_end - b.v_begin,
@@ -259,9 +350,19 @@ void print_info(const Scene& scene) {
     fmt::print("steps      {} to t = {} s\n",
                static_cast<std::int64_t>(std::ceil(scene.run.end_time / dt - 1e-9)),
                scene.run.end_time);
+  if (fluid_setup)
+    fmt::print("fluid dt   {:.4e} s (CFL/force/viscous limit at the start)\n", fluid_dt(*fluid_setup));
   fmt::print("memory     {:.1f} MiB of solver state ({:.0f} bytes per tet)\n",
              be->device_bytes() / 1048576.0,
              model.n_tets() ? static_cast<double>(be->device_bytes()) / model.n_tets() : 0.0);
+  const GpuInfo gpu = gpu_info();
+  fmt::print("backend    {} (run.backend; cuda {})\n", scene.run.backend,
+             gpu.available ? "available" : "not available");
+  if (gpu.available)
+    fmt::print("gpu        {}; this scene's state would use {:.1f} % of it\n", gpu_summary(gpu),
+               100.0 * be->device_bytes() / static_cast<double>(gpu.free_bytes));
+  else
+    fmt::print("gpu        {}\n", gpu_summary(gpu));
 }
 
 void export_meshes(const Scene& scene, const std::filesystem::path& dir) {

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -18,8 +19,8 @@ namespace qdemsph {
 // Reductions a dynamic-relaxation step needs (over unconstrained free vertices).
 struct StaticStats {
   double residual_max = 0;  // max |f|
-  double rayleigh_num = 0;  // -sum (f_int . u): u^T K u for a linear law
-  double rayleigh_den = 0;  // sum m |u|^2
+  double rayleigh_num = 0;  // sum d . (f0 - f), d = x - x0: d^T K d for a linear law
+  double rayleigh_den = 0;  // sum m' |u|^2 with the relaxation masses
 };
 
 struct HostFields {
@@ -40,9 +41,13 @@ class Backend {
   virtual void compute_forces(double dt_dissipation, double mass_damping) = 0;
   virtual void kick(double h) = 0;   // v += h f / m
   virtual void drift(double h) = 0;  // x += h v
-  // Dynamic relaxation: v = ((1 - c dt/2) v + dt f/m) / (1 + c dt/2), then x += dt v.
+  // Dynamic relaxation with the fictitious masses m' (Model::relax_inv_mass):
+  // v = ((1 - c dt/2) v + dt f/m') / (1 + c dt/2), then x += dt v.
   virtual void damped_step(double dt, double c) = 0;
   virtual void zero_velocity() = 0;
+  // Remembers x0 and f0 = f(x0) (call after compute_forces) for static_stats' Rayleigh
+  // quotient, which then covers only the free part of displacement-driven problems.
+  virtual void mark_relax_start() = 0;
   virtual StaticStats static_stats() = 0;
   virtual Energies energies() = 0;
   // -1 when all positions/velocities are finite, else the first offending vertex found.
@@ -52,6 +57,10 @@ class Backend {
   virtual HostFields download(bool with_stress) = 0;
   virtual void sync() = 0;
   virtual std::size_t device_bytes() const = 0;
+  // Wall time of sub-stages run inside compute_forces (e.g. "contact.broad"), cumulative.
+  virtual std::map<std::string, double> stage_seconds() const { return {}; }
+  // The contact stage's counters of the last step (pairs, contacts, max_overlap, ...).
+  virtual std::map<std::string, double> contact_stats() const { return {}; }
 };
 
 // "cpu" (OpenMP) or "cuda"; throws InputError for an unknown or unavailable backend.

@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "contact/contact_stage.hpp"
+#include "core/error.hpp"
 #include "core/error_flag.hpp"
 #include "core/memory.hpp"
 #include "integrate/backend.hpp"
@@ -40,6 +42,7 @@ class QdemBackend final : public Backend {
     fpre_.assign(m.fpre);
     mass_.assign(m.mass);
     inv_mass_.assign(m.inv_mass);
+    relax_inv_mass_.assign(m.relax_inv_mass);
     diss_v_.resize(nv_);
     std::vector<std::int32_t> tv(4 * nt_);
     std::vector<double> dxi(9 * nt_);
@@ -67,6 +70,16 @@ class QdemBackend final : public Backend {
     csr_off_.assign(off);
     csr_ent_.assign(ent);
     flag_.resize(1);
+    contact_.reset();
+    if (m.contact.enabled) {
+      if constexpr (S == Space::Host) {
+        contact_ = std::make_unique<ContactStage<Exec>>();
+        contact_->upload(m);
+      } else {
+        throw InputError("the scene needs contact, which backend '" + name_ +
+                         "' does not have yet; use --backend cpu");
+      }
+    }
   }
 
   void use_preload(bool on) override { preload_ = on; }
@@ -114,6 +127,22 @@ class QdemBackend final : public Backend {
       }
       f.set(i, s);
     });
+    if constexpr (S == Space::Host)
+      if (contact_) contact_->add_forces(x_.cview(), v_.cview(), f_.view(), dt_diss);
+  }
+
+  std::map<std::string, double> stage_seconds() const override {
+    if (!contact_) return {};
+    return contact_->seconds();
+  }
+  std::map<std::string, double> contact_stats() const override {
+    if (!contact_) return {};
+    const ContactStepStats& c = contact_->stats();
+    return {{"pairs", static_cast<double>(c.pairs)},
+            {"contacts", static_cast<double>(c.contacts)},
+            {"active", static_cast<double>(c.active)},
+            {"max_overlap", c.max_overlap},
+            {"max_overlap_ever", contact_->max_overlap_ever()}};
   }
 
   void kick(double h) override {
@@ -133,7 +162,7 @@ class QdemBackend final : public Backend {
 
   void damped_step(double dt, double c) override {
     const auto f = f_.cview();
-    const auto im = inv_mass_.cview();
+    const auto im = relax_inv_mass_.cview();
     const auto v = v_.view();
     const auto x = x_.view();
     const double a = (1 - 0.5 * c * dt) / (1 + 0.5 * c * dt), b = dt / (1 + 0.5 * c * dt);
@@ -154,22 +183,29 @@ class QdemBackend final : public Backend {
     });
   }
 
+  void mark_relax_start() override {
+    x0_.resize(nv_);
+    f0_.resize(nv_);
+    const auto x = x_.cview(), f = f_.cview();
+    const auto x0 = x0_.view(), f0 = f0_.view();
+    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+      x0.set(i, x[i]);
+      f0.set(i, f[i]);
+    });
+  }
+
   StaticStats static_stats() override {
-    const auto f = f_.cview(), x = x_.cview(), X = X_.cview();
-    const auto fext = (preload_ ? fpre_ : fext_).cview();
-    const auto im = inv_mass_.cview(), mass = mass_.cview();
-    const Vec3 g = gravity_;
+    const auto f = f_.cview(), x = x_.cview(), x0 = x0_.cview(), f0 = f0_.cview();
+    const auto im = inv_mass_.cview(), rim = relax_inv_mass_.cview();
     StaticStats s;
     s.residual_max = reduce_max(
         Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return im[i] > 0 ? norm(f[i]) : 0.0; },
         0.0);
     s.rayleigh_num = reduce_sum(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-      if (!(im[i] > 0)) return 0.0;
-      const Vec3 fint = f[i] - fext[i] - mass[i] * g;
-      return -dot(fint, x[i] - X[i]);
+      return rim[i] > 0 ? dot(x[i] - x0[i], f0[i] - f[i]) : 0.0;
     });
     s.rayleigh_den = reduce_sum(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-      return im[i] > 0 ? mass[i] * norm2(x[i] - X[i]) : 0.0;
+      return rim[i] > 0 ? norm2(x[i] - x0[i]) / rim[i] : 0.0;
     });
     return s;
   }
@@ -275,9 +311,9 @@ class QdemBackend final : public Backend {
 
   std::size_t device_bytes() const override {
     return X_.bytes() + x_.bytes() + v_.bytes() + f_.bytes() + fext_.bytes() + fpre_.bytes() +
-           mass_.bytes() + inv_mass_.bytes() + diss_v_.bytes() + tv_.bytes() + dxi_.bytes() +
+           mass_.bytes() + inv_mass_.bytes() + relax_inv_mass_.bytes() + diss_v_.bytes() + tv_.bytes() + dxi_.bytes() +
            vol0_.bytes() + tmat_.bytes() + tf_.bytes() + diss_t_.bytes() + csr_off_.bytes() +
-           csr_ent_.bytes();
+           csr_ent_.bytes() + (contact_ ? contact_->bytes() : 0);
   }
 
  private:
@@ -285,12 +321,13 @@ class QdemBackend final : public Backend {
   std::int64_t nv_ = 0, nt_ = 0, nfv_ = 0, nft_ = 0;
   Vec3 gravity_;
   bool preload_ = false;
-  Vec3Buffer X_{S}, x_{S}, v_{S}, f_{S}, fext_{S}, fpre_{S}, tf_{S};
-  Buffer<double> mass_{S}, inv_mass_{S}, diss_v_{S}, dxi_{S}, vol0_{S}, diss_t_{S};
+  Vec3Buffer X_{S}, x_{S}, v_{S}, f_{S}, fext_{S}, fpre_{S}, tf_{S}, x0_{S}, f0_{S};
+  Buffer<double> mass_{S}, inv_mass_{S}, relax_inv_mass_{S}, diss_v_{S}, dxi_{S}, vol0_{S}, diss_t_{S};
   Buffer<std::int32_t> tv_{S}, tmat_{S};
   Buffer<Material> mats_{S};
   Buffer<std::int64_t> csr_off_{S}, csr_ent_{S};
   Buffer<unsigned long long> flag_{S};
+  std::unique_ptr<ContactStage<Exec>> contact_;  // null when the model needs no contact
 };
 
 }  // namespace qdemsph

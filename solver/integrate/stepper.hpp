@@ -10,6 +10,7 @@
 #include "core/timers.hpp"
 #include "integrate/backend.hpp"
 #include "model/model.hpp"
+#include "sph/fluid_stage.hpp"
 
 namespace qdemsph {
 
@@ -17,7 +18,7 @@ struct RelaxResult {
   bool converged = false;
   std::int64_t iterations = 0;
   double residual = 0;   // max |f| / reference load at the end
-  double reference = 0;  // max |applied force| on a vertex [N]
+  double reference = 0;  // max(applied force, initial residual) on a vertex [N]
 };
 
 class Stepper {
@@ -25,7 +26,10 @@ class Stepper {
   // dt is used as given; callers check it against model.dt_critical (see choose_dt).
   Stepper(const Model& model, Backend& backend, double dt, int check_every = 10);
 
-  // Velocity Verlet: v += dt/2 f/m; x += dt v; f = f(x, v); v += dt/2 f/m.
+  // The SPH fluid advanced with the solids at the same dt (phase timer "sph"); null: none.
+  void attach_fluid(FluidStage* fluid) { fluid_ = fluid; }
+
+  // Velocity Verlet: v += dt/2 f/m; x += dt v; f = f(x, v); v += dt/2 f/m (solids and fluid).
   void step();
   // Verifies positions/velocities are finite and no tet inverted; throws SimulationError.
   void check() const;
@@ -45,6 +49,7 @@ class Stepper {
   Backend& be_;
   double dt_;
   int check_every_;
+  FluidStage* fluid_ = nullptr;
   double t_ = 0;
   std::int64_t n_ = 0;
   mutable PhaseTimers timers_;

@@ -40,14 +40,21 @@ struct Region {
 };
 
 struct MeshSpec {
-  enum class Kind { Box, Gmsh } kind = Kind::Box;
+  enum class Kind { Box, Gmsh, Shogi } kind = Kind::Box;
   // box: origin + size, cells per axis; each hex split into 12 tets around a centre vertex
   Vec3 origin{0, 0, 0};
   Vec3 size{1, 1, 1};
   std::array<int, 3> cells{1, 1, 1};
   std::filesystem::path file;  // gmsh: absolute path (resolved against the scene's folder)
   double scale = 1.0;          // gmsh: coordinates multiplied by this
-  Vec3 translate{0, 0, 0};     // gmsh: added after scaling
+  Vec3 translate{0, 0, 0};     // gmsh: added after scaling; shogi: after rotating
+  // shogi: a piece of the preset `piece` (king, rook, gold, knight, lance, pawn), target edge
+  // length mesh_size (0: about 2,500 tets), rotated by `rotate_angle` degrees about
+  // `rotate_axis` through the base centre, then translated.
+  std::string piece = "king";
+  double mesh_size = 0;
+  Vec3 rotate_axis{1, 0, 0};
+  double rotate_angle = 0;
 };
 
 struct BodySpec {
@@ -101,6 +108,54 @@ struct OutputSpec {
   double probes_every = 0;   // simulated seconds between probe rows; 0: every 100 steps
 };
 
+// Weakly compressible SPH fluid (docs/scene-format.md, `fluid:`). Boxes are axis-aligned
+// [min, max]; particles sit on a lattice of pitch `spacing`.
+struct FluidBoxSpec {
+  Vec3 min{0, 0, 0}, max{0, 0, 0};
+  int thickness_layers = 3;  // tanks: wall layers outside the inner box
+};
+
+struct FluidSpec {
+  bool present = false;
+  double density = 1000;                // rho0 [kg/m^3]
+  std::optional<double> sound_speed;    // c0 [m/s]; absent: auto = 10 sqrt(2 |g| H)
+  std::string viscosity_type = "artificial";  // artificial (alpha) or laminar (nu [m^2/s])
+  double viscosity = 0.01;
+  bool wall_viscosity = true;           // viscosity also between fluid and walls
+  double delta = 0.1;                   // delta-SPH density diffusion coefficient
+  double spacing = 0;                   // particle spacing dx [m]
+  double smoothing = 1.3;               // h / dx
+  bool hydrostatic_init = true;         // initial pressure rho0 g (H - depth) per block
+  std::vector<FluidBoxSpec> blocks;     // fluid
+  std::vector<FluidBoxSpec> tanks;      // open-top containers: walls around the inner box
+  std::vector<FluidBoxSpec> walls;      // solid boxes of wall particles
+};
+
+// Contact between bodies (docs/scene-format.md, `contact:`). Per material pair values
+// override the defaults; stiffness 0 means derived from E and the mesh size.
+struct ContactPairSpec {
+  int material_a = 0, material_b = 0;
+  std::optional<double> mu, restitution, stiffness;
+};
+
+struct ContactSpec {
+  double mu = 0.3;
+  double restitution = 0.5;
+  std::optional<double> d_dem;  // absent: 0.1 x the smallest body's mean surface edge
+  bool self_contact = false;
+  std::string broad_phase = "polygons";  // polygons | surface_tets | all_tets (report Fig. 7)
+  double stiffness_factor = 0.5;         // default k_n = factor * E_pair * h_pair
+  std::vector<ContactPairSpec> pairs;
+};
+
+// An analytic plane: bodies stay on the side the normal points to.
+struct WallSpec {
+  Vec3 point{0, 0, 0}, normal{0, 0, 1};
+  double mu = 0.3;
+  std::optional<double> restitution;  // absent: contact.restitution
+  std::optional<double> stiffness;    // absent: derived from the body's E and mesh size
+};
+
 struct Scene {
   std::filesystem::path file;  // where it was read from
   std::string name;
@@ -112,6 +167,9 @@ struct Scene {
   std::vector<ConstraintSpec> constraints;
   std::vector<LoadSpec> loads;
   std::vector<ProbeSpec> probes;
+  FluidSpec fluid;
+  ContactSpec contact;
+  std::vector<WallSpec> walls;  // analytic planes (contact), not fluid walls
   OutputSpec output;
 };
 

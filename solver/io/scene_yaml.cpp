@@ -400,7 +400,22 @@ MeshSpec parse_mesh(const Context& ctx, const Field& f) {
   if (!type.node().IsDefined() || type.node().IsNull())
     ctx.fail(f.node(), type.path(), "required key is missing", false);
   MeshSpec mesh;
-  if (type.choice({"box", "gmsh"}) == "box") {
+  const std::string kind = type.choice({"box", "gmsh", "shogi"});
+  if (kind == "shogi") {
+    const MapView m(ctx, f, {"type", "piece", "mesh_size", "translate", "rotate"});
+    mesh.kind = MeshSpec::Kind::Shogi;
+    if (auto v = m.opt("piece"))
+      mesh.piece = v->choice({"king", "rook", "bishop", "gold", "silver", "knight", "lance", "pawn"});
+    if (auto v = m.opt("mesh_size")) mesh.mesh_size = v->number(positive, "must be > 0");
+    if (auto v = m.opt("translate")) mesh.translate = v->vec3();
+    if (auto v = m.opt("rotate")) {
+      const MapView r(ctx, *v, {"axis", "angle"});
+      const Field axis = r.req("axis");
+      mesh.rotate_axis = axis.vec3();
+      if (!(norm(mesh.rotate_axis) > 0)) axis.fail("must not be the zero vector");
+      mesh.rotate_angle = r.req("angle").number();
+    }
+  } else if (kind == "box") {
     const MapView m(ctx, f, {"type", "origin", "size", "cells"});
     mesh.kind = MeshSpec::Kind::Box;
     if (auto v = m.opt("origin")) mesh.origin = v->vec3();
@@ -524,6 +539,96 @@ ProbeSpec parse_probe(const Context& ctx, const Field& f, const std::vector<Body
   return p;
 }
 
+FluidBoxSpec parse_fluid_box(const Context& ctx, const Field& f, bool tank) {
+  const MapView m(ctx, f,
+                  tank ? std::vector<std::string>{"min", "max", "thickness_layers"}
+                       : std::vector<std::string>{"min", "max"});
+  FluidBoxSpec b;
+  b.min = m.req("min").vec3();
+  const Field mx = m.req("max");
+  b.max = mx.vec3();
+  for (int a = 0; a < 3; ++a)
+    if (!(b.max[a] > b.min[a])) mx.element(a).fail("must be > min");
+  if (tank)
+    if (auto v = m.opt("thickness_layers")) b.thickness_layers = static_cast<int>(v->integer(1, 16));
+  return b;
+}
+
+FluidSpec parse_fluid(const Context& ctx, const Field& f) {
+  const MapView m(ctx, f,
+                  {"density", "sound_speed", "viscosity", "viscosity_type", "wall_viscosity",
+                   "delta", "spacing", "smoothing", "hydrostatic_init", "blocks", "tanks",
+                   "walls"});
+  FluidSpec fl;
+  fl.present = true;
+  if (auto v = m.opt("density")) fl.density = v->number(positive, "must be > 0");
+  if (auto v = m.opt("sound_speed")) {
+    if (!(v->node().IsScalar() && v->node().Scalar() == "auto"))
+      fl.sound_speed = v->number(positive, "must be > 0 or auto");
+  }
+  if (auto v = m.opt("viscosity_type")) fl.viscosity_type = v->choice({"artificial", "laminar"});
+  if (auto v = m.opt("viscosity")) fl.viscosity = v->number(non_negative, "must be >= 0");
+  if (auto v = m.opt("wall_viscosity")) fl.wall_viscosity = v->boolean();
+  if (auto v = m.opt("delta")) fl.delta = v->number([](double x) { return x >= 0 && x <= 1; }, "must be in [0, 1]");
+  fl.spacing = m.req("spacing").number(positive, "must be > 0");
+  if (auto v = m.opt("smoothing"))
+    fl.smoothing = v->number([](double x) { return x >= 1 && x <= 3; }, "must be in [1, 3] (h / spacing)");
+  if (auto v = m.opt("hydrostatic_init")) fl.hydrostatic_init = v->boolean();
+  const Field blocks = m.req("blocks");
+  for (const auto& bf : blocks.list()) fl.blocks.push_back(parse_fluid_box(ctx, bf, false));
+  if (fl.blocks.empty()) blocks.fail("at least one fluid block is required");
+  if (auto v = m.opt("tanks"))
+    for (const auto& bf : v->list()) fl.tanks.push_back(parse_fluid_box(ctx, bf, true));
+  if (auto v = m.opt("walls"))
+    for (const auto& bf : v->list()) fl.walls.push_back(parse_fluid_box(ctx, bf, false));
+  return fl;
+}
+
+double restitution(const Field& f) {
+  return f.number([](double x) { return x > 0 && x <= 1; }, "must be in (0, 1]");
+}
+
+ContactSpec parse_contact(const Context& ctx, const Field& f, const std::vector<MaterialSpec>& mats) {
+  const MapView m(ctx, f, {"mu", "restitution", "d_dem", "self_contact", "broad_phase",
+                           "stiffness_factor", "pairs"});
+  ContactSpec c;
+  if (auto v = m.opt("mu")) c.mu = v->number(non_negative, "must be >= 0");
+  if (auto v = m.opt("restitution")) c.restitution = restitution(*v);
+  if (auto v = m.opt("d_dem")) c.d_dem = v->number(positive, "must be > 0");
+  if (auto v = m.opt("self_contact")) c.self_contact = v->boolean();
+  if (auto v = m.opt("broad_phase")) c.broad_phase = v->choice({"polygons", "surface_tets", "all_tets"});
+  if (auto v = m.opt("stiffness_factor")) c.stiffness_factor = v->number(positive, "must be > 0");
+  if (auto v = m.opt("pairs")) {
+    for (const auto& pf : v->list()) {
+      const MapView pm(ctx, pf, {"materials", "mu", "restitution", "stiffness"});
+      ContactPairSpec p;
+      const Field ms = pm.req("materials");
+      ms.expect_list(2, "material names");
+      p.material_a = lookup(ms.element(0), mats, "material", "materials");
+      p.material_b = lookup(ms.element(1), mats, "material", "materials");
+      if (auto x = pm.opt("mu")) p.mu = x->number(non_negative, "must be >= 0");
+      if (auto x = pm.opt("restitution")) p.restitution = restitution(*x);
+      if (auto x = pm.opt("stiffness")) p.stiffness = x->number(positive, "must be > 0 [N/m]");
+      c.pairs.push_back(p);
+    }
+  }
+  return c;
+}
+
+WallSpec parse_wall(const Context& ctx, const Field& f) {
+  const MapView m(ctx, f, {"point", "normal", "mu", "restitution", "stiffness"});
+  WallSpec w;
+  w.point = m.req("point").vec3();
+  const Field n = m.req("normal");
+  w.normal = n.vec3();
+  if (!(norm(w.normal) > 0)) n.fail("must not be the zero vector");
+  w.normal = w.normal / norm(w.normal);
+  if (auto v = m.opt("mu")) w.mu = v->number(non_negative, "must be >= 0");
+  if (auto v = m.opt("restitution")) w.restitution = restitution(*v);
+  if (auto v = m.opt("stiffness")) w.stiffness = v->number(positive, "must be > 0 [N/m]");
+  return w;
+}
+
 OutputSpec parse_output(const Context& ctx, const Field& f, const std::string& scene_name) {
   const MapView m(ctx, f, {"dir", "fields_every", "probes_every"});
   OutputSpec o;
@@ -539,7 +644,7 @@ Scene build_scene(const Context& ctx, const YAML::Node& root, const fs::path& fi
   if (!root.IsDefined() || root.IsNull()) throw InputError(file.string() + ": scene file is empty");
   const MapView m(ctx, top,
                   {"name", "run", "gravity", "damping", "materials", "bodies", "constraints",
-                   "loads", "probes", "output"});
+                   "loads", "probes", "fluid", "contact", "walls", "output"});
   Scene s;
   s.file = file;
   s.name = file.stem().string();
@@ -554,7 +659,11 @@ Scene build_scene(const Context& ctx, const YAML::Node& root, const fs::path& fi
     if (auto a = d.opt("mass")) s.mass_damping = a->number(non_negative, "must be >= 0");
   }
 
-  const Field mats = m.req("materials");
+  // A fluid-only scene needs no materials or bodies.
+  if (auto v = m.opt("fluid")) s.fluid = parse_fluid(ctx, *v);
+  const bool fluid_only = s.fluid.present && !m.has("bodies");
+  const Field mats = fluid_only && !m.has("materials") ? Field(ctx, YAML::Node(YAML::NodeType::Map), "materials")
+                                                       : m.req("materials");
   if (!mats.node().IsMap()) mats.fail("expected a mapping of material names to materials");
   for (const auto& kv : mats.node()) {
     const std::string name = kv.first.IsScalar() ? kv.first.Scalar() : "";
@@ -564,11 +673,12 @@ Scene build_scene(const Context& ctx, const YAML::Node& root, const fs::path& fi
       if (prev.name == name) ctx.fail(kv.first, mf.path(), "duplicate material name", false);
     s.materials.push_back(parse_material(ctx, name, mf));
   }
-  if (s.materials.empty()) mats.fail("at least one material is required", false);
+  if (s.materials.empty() && !fluid_only) mats.fail("at least one material is required", false);
 
-  const Field bodies = m.req("bodies");
+  const Field bodies = fluid_only ? Field(ctx, YAML::Node(YAML::NodeType::Sequence), "bodies")
+                                  : m.req("bodies");
   const std::vector<Field> body_fields = bodies.list();
-  if (body_fields.empty()) bodies.fail("at least one body is required");
+  if (body_fields.empty() && !fluid_only) bodies.fail("at least one body is required");
   for (const auto& bf : body_fields) {
     BodySpec b = parse_body(ctx, bf, s.materials);
     for (const auto& prev : s.bodies)
@@ -590,6 +700,9 @@ Scene build_scene(const Context& ctx, const YAML::Node& root, const fs::path& fi
       s.probes.push_back(std::move(p));
     }
   }
+  if (auto v = m.opt("contact")) s.contact = parse_contact(ctx, *v, s.materials);
+  if (auto v = m.opt("walls"))
+    for (const auto& wf : v->list()) s.walls.push_back(parse_wall(ctx, wf));
   if (auto v = m.opt("output"))
     s.output = parse_output(ctx, *v, s.name);
   else

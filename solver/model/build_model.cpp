@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "mesh/box.hpp"
 #include "mesh/gmsh_io.hpp"
+#include "mesh/shogi.hpp"
 #include "mesh/surface.hpp"
 #include "model/model.hpp"
 #include "physics/element.hpp"
@@ -15,8 +16,27 @@
 namespace qdemsph {
 namespace {
 
+ShogiSize shogi_preset(const std::string& piece) {
+  if (piece == "rook" || piece == "bishop") return ShogiSize::rook();
+  if (piece == "gold" || piece == "silver") return ShogiSize::gold();
+  if (piece == "knight") return ShogiSize::knight();
+  if (piece == "lance") return ShogiSize::lance();
+  if (piece == "pawn") return ShogiSize::pawn();
+  return ShogiSize::king();
+}
+
 TetMesh make_body_mesh(const BodySpec& b) {
   if (b.mesh.kind == MeshSpec::Kind::Box) return make_box(b.mesh.origin, b.mesh.size, b.mesh.cells);
+  if (b.mesh.kind == MeshSpec::Kind::Shogi) {
+    TetMesh m = make_shogi_piece(shogi_preset(b.mesh.piece), b.mesh.mesh_size);
+    // Rodrigues rotation about the axis through the base centre, then the translation.
+    const Vec3 k = b.mesh.rotate_axis / norm(b.mesh.rotate_axis);
+    const double a = b.mesh.rotate_angle * 3.14159265358979323846 / 180.0;
+    const double c = std::cos(a), sn = std::sin(a);
+    for (auto& p : m.points)
+      p = c * p + sn * cross(k, p) + ((1 - c) * dot(k, p)) * k + b.mesh.translate;
+    return m;
+  }
   TetMesh m = read_gmsh(b.mesh.file);
   for (auto& p : m.points) p = b.mesh.scale * p + b.mesh.translate;
   return m;
@@ -35,6 +55,27 @@ bool all_inside(const Region& r, const std::vector<Vec3>& X, const std::array<st
   return r.contains(X[tri[0]]) && r.contains(X[tri[1]]) && r.contains(X[tri[2]]);
 }
 
+void assign_relaxation_mass(Model& model) {
+  std::vector<double> dt(model.n_free_tets);
+  double target = 0;
+  for (std::int64_t t = 0; t < model.n_free_tets; ++t) {
+    Vec3 p[4];
+    for (int k = 0; k < 4; ++k) p[k] = model.X[model.tets[t][k]];
+    dt[t] = tet_critical_dt(model.materials[model.tet_material[t]], min_altitude(p));
+    target = std::max(target, dt[t]);
+  }
+  std::vector<double> mass(model.X.size(), 0.0);
+  for (std::int64_t t = 0; t < model.n_free_tets; ++t) {
+    const double rho = model.materials[model.tet_material[t]].density;
+    const double scale = (target / dt[t]) * (target / dt[t]);
+    for (int k = 0; k < 4; ++k) mass[model.tets[t][k]] += scale * rho * model.vol0[t] / 4.0;
+  }
+  model.relax_inv_mass.assign(model.X.size(), 0.0);
+  for (std::size_t i = 0; i < mass.size(); ++i)
+    if (model.inv_mass[i] > 0 && mass[i] > 0) model.relax_inv_mass[i] = 1.0 / mass[i];
+  model.relax_dt = 0.9 * target;
+}
+
 }  // namespace
 
 Model build_model(const Scene& scene) {
@@ -51,6 +92,7 @@ Model build_model(const Scene& scene) {
   std::stable_partition(order.begin(), order.end(),
                         [&](int i) { return !scene.bodies[i].fixed; });
   std::vector<int> body_slot(scene.bodies.size());
+  std::vector<std::uint8_t> tet_is_surface;  // per global tet (edge rule), for contact
 
   for (int bi : order) {
     const BodySpec& spec = scene.bodies[bi];
@@ -116,7 +158,9 @@ Model build_model(const Scene& scene) {
       model.gid.push_back(model.gid.size());
       model.body.push_back(body_slot[bi]);
     }
-    for (const auto& tri : analyse_surface(mesh).triangles) {
+    const SurfaceInfo surf = analyse_surface(mesh);
+    tet_is_surface.insert(tet_is_surface.end(), surf.tet_is_surface.begin(), surf.tet_is_surface.end());
+    for (const auto& tri : surf.triangles) {
       SurfaceTriangle g = tri;
       for (auto& v : g.v) v += voff;
       g.tet += static_cast<std::int32_t>(range.t_begin);
@@ -191,6 +235,11 @@ Model build_model(const Scene& scene) {
       target[best] += ls.force;
     }
   }
+  build_contact_model(scene, model, tet_is_surface);
+  if (model.contact.enabled && model.contact.dt_limit > 0 && model.dt_critical_tet >= 0 &&
+      model.contact.dt_limit < model.dt_critical)
+    model.dt_critical = model.contact.dt_limit;
+  assign_relaxation_mass(model);
   return model;
 }
 

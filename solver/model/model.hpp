@@ -14,6 +14,7 @@
 #include "core/vec.hpp"
 #include "io/scene.hpp"
 #include "mesh/tet_mesh.hpp"
+#include "model/contact_model.hpp"
 #include "physics/material.hpp"
 
 namespace qdemsph {
@@ -55,7 +56,15 @@ struct Model {
   Vec3 gravity{0, 0, 0};
   double mass_damping = 0;
 
-  double dt_critical = 0;          // stability limit over free tets
+  ContactModel contact;  // surface topology and contact parameters (enabled when needed)
+
+  // Dynamic relaxation (static mode) integrates with fictitious masses scaled per tet so
+  // that every tet has the same stability limit relax_dt: the equilibrium does not depend
+  // on the mass, but the iteration count does (small or distorted tets no longer set it).
+  std::vector<double> relax_inv_mass;
+  double relax_dt = 0;
+
+  double dt_critical = 0;          // stability limit over free tets (and contact springs)
   std::int64_t dt_critical_tet = -1;
 
   std::int64_t n_vertices() const { return static_cast<std::int64_t>(X.size()); }

@@ -87,10 +87,11 @@ class RunResult:
 
 
 class Qdemsph:
-    def __init__(self, binary, backend=None, timeout_s=1800):
+    def __init__(self, binary, backend=None, timeout_s=1800, threads=0):
         self.binary = Path(binary)
         self.backend = backend
         self.timeout_s = timeout_s
+        self.threads = threads  # > 0: passed as run.threads
 
     def check(self):
         if not self.binary.exists():
@@ -127,6 +128,8 @@ class Qdemsph:
         args = ["run", scene, "--out", out, "--quiet"]
         if self.backend:
             args += ["--backend", self.backend]
+        if self.threads and self.threads > 0:
+            args += ["--set", f"run.threads={self.threads}"]
         for s in sets:
             args += ["--set", s]
         spath = out / "summary.json"

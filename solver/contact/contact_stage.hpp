@@ -1,0 +1,594 @@
+// The contact stage (METHOD.md section 3), written once over an execution space. Called from
+// QdemBackend::compute_forces when the model needs contact; adds contact forces to f.
+//
+// Per step:
+//  1. broad phase: centroid c and radius r (max centroid-vertex distance) of every primitive
+//     (surface triangle, surface tet or tet: model/contact_model.hpp), a cell list of width
+//     L = max(2 r) + D_DEM (report eq. 9-10), candidate pairs (count, scan, fill) of
+//     primitives of different bodies (or of one body with self-contact) whose spheres grown
+//     by D_DEM overlap, never two fixed bodies;
+//  2. narrow phase over the triangles each primitive owns: point-face and edge-edge
+//     (physics/contact_geometry.hpp) for the features each triangle owns, plus surface
+//     vertices against analytic walls; records counted, scanned, filled, sorted by key;
+//     of several point-face hits of one vertex on one body only the one with the largest
+//     signed gap is kept (a vertex on a shared edge is one touch, not two);
+//  3. force: the DEM law (physics/contact_law.hpp) between virtual particles of diameter
+//     D_DEM at the two surface points, tangential history looked up by key (binary search
+//     in the previous step's sorted keys), force distributed by weights (a gap below -D_DEM
+//     counts only for a feature pair that was in contact the step before: the back face of
+//     a thin body is not a penetration); a per-vertex gather
+//     (count, scan, fill, segment sort) adds it to f in a fixed order (deterministic).
+// Data: SoA views for topology and history; contact records are a transient AoS array.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <utility>
+#include <string>
+
+#include "contact/contact_record.hpp"
+#include "contact/contact_sort_host.hpp"
+#include "core/memory.hpp"
+#include "core/timers.hpp"
+#include "model/model.hpp"
+#include "neighbor/cell_grid.hpp"
+#include "neighbor/pair_list.hpp"
+#include "neighbor/scan.hpp"
+#include "physics/contact_geometry.hpp"
+#include "physics/contact_law.hpp"
+
+namespace qdemsph {
+
+// Read-only topology views used by the narrow phase (trivially copyable).
+struct ContactTopology {
+  View<const std::int32_t> tri_v;  // tri_v[k * ntri + s]
+  std::int64_t ntri = 0;
+  View<const std::int32_t> tri_body, edge_v;  // edge_v[k * ne + e]
+  std::int64_t ne = 0;
+  View<const std::int64_t> own_v_off, own_e_off, prim_tri_off;
+  View<const std::int32_t> own_v, own_e, prim_tri;
+  View<const double> body_h;
+  double d_dem = 0;
+  bool self_contact = false;
+
+  QDEMSPH_HD int tri_vertex(std::int64_t s, int k) const { return tri_v[k * ntri + s]; }
+  QDEMSPH_HD bool tri_has(std::int64_t s, int v) const {
+    return tri_vertex(s, 0) == v || tri_vertex(s, 1) == v || tri_vertex(s, 2) == v;
+  }
+
+  // Contacts between the features owned by triangles a and b; writes them to out (if not
+  // null) and returns how many.
+  QDEMSPH_HD int narrow_tris(Vec3CView x, std::int64_t a, std::int64_t b, ContactRecord* out) const {
+    const int ba = tri_body[a], bb = tri_body[b];
+    const bool same = ba == bb;
+    const double ha = body_h[ba], hb = body_h[bb];
+    const double pen = d_dem + 0.5 * (ha < hb ? ha : hb);  // deepest gap still a contact
+    Vec3 pa[3], pb[3];
+    for (int k = 0; k < 3; ++k) {
+      pa[k] = x[tri_vertex(a, k)];
+      pb[k] = x[tri_vertex(b, k)];
+    }
+    int n = 0;
+    // Point-face both ways.
+    for (int side = 0; side < 2; ++side) {
+      const std::int64_t s1 = side == 0 ? a : b, s2 = side == 0 ? b : a;
+      const Vec3* p2 = side == 0 ? pb : pa;
+      for (std::int64_t q = own_v_off[s1]; q < own_v_off[s1 + 1]; ++q) {
+        const int A = own_v[q];
+        if (same && tri_has(s2, A)) continue;
+        const PointFace pf = point_face(x[A], p2[0], p2[1], p2[2]);
+        if (!pf.inside || !(pf.s < d_dem) || !(pf.s > -pen)) continue;
+        if (out) {
+          ContactRecord& r = out[n];
+          r = ContactRecord{};
+          r.type = kPointFace;
+          r.k1 = contact_key1(kPointFace, static_cast<std::uint64_t>(A));
+          r.k2 = static_cast<std::uint64_t>(s2);
+          r.v[0] = A;
+          r.w[0] = 1;
+          for (int k = 0; k < 3; ++k) {
+            r.v[k + 1] = tri_vertex(s2, k);
+            r.w[k + 1] = pf.w[k];
+          }
+          r.n = pf.n;
+          r.d = pf.s;
+          r.n1 = 1;
+          r.body1 = side == 0 ? ba : bb;
+          r.body2 = side == 0 ? bb : ba;
+        }
+        ++n;
+      }
+    }
+    // Edge-edge.
+    const Vec3 na = cross(pa[1] - pa[0], pa[2] - pa[0]), nb = cross(pb[1] - pb[0], pb[2] - pb[0]);
+    for (std::int64_t qa = own_e_off[a]; qa < own_e_off[a + 1]; ++qa)
+      for (std::int64_t qb = own_e_off[b]; qb < own_e_off[b + 1]; ++qb) {
+        const int ea = own_e[qa], eb = own_e[qb];
+        const bool swap = eb < ea;
+        const int e1 = swap ? eb : ea, e2 = swap ? ea : eb;
+        const int a0 = edge_v[e1], a1 = edge_v[ne + e1], b0 = edge_v[e2], b1 = edge_v[ne + e2];
+        if (same && (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1)) continue;
+        const EdgeEdge ee = edge_edge(x[a0], x[a1], x[b0], x[b1], swap ? nb : na, swap ? na : nb);
+        // Edges have no face region to confirm a penetration: two skew edges merely passing
+        // behind each other would read as a deep overlap. Accept |d| < D_DEM only.
+        if (!ee.valid || !(ee.d < d_dem) || !(ee.d > -d_dem)) continue;
+        if (out) {
+          ContactRecord& r = out[n];
+          r = ContactRecord{};
+          r.type = kEdgeEdge;
+          r.k1 = contact_key1(kEdgeEdge, static_cast<std::uint64_t>(e1));
+          r.k2 = static_cast<std::uint64_t>(e2);
+          r.v[0] = a0;
+          r.v[1] = a1;
+          r.v[2] = b0;
+          r.v[3] = b1;
+          r.w[0] = 1 - ee.s;
+          r.w[1] = ee.s;
+          r.w[2] = 1 - ee.t;
+          r.w[3] = ee.t;
+          r.n = ee.n;
+          r.d = ee.d;
+          r.n1 = 2;
+          r.body1 = swap ? bb : ba;
+          r.body2 = swap ? ba : bb;
+        }
+        ++n;
+      }
+    return n;
+  }
+};
+static_assert(std::is_trivially_copyable_v<ContactTopology>);
+
+struct ContactStepStats {
+  std::int64_t pairs = 0, contacts = 0, active = 0;
+  double max_overlap = 0;  // max (D_DEM - d) over active contacts [m]
+};
+
+template <class Exec>
+class ContactStage {
+  static constexpr Space S = Exec::space;
+
+ public:
+  ContactStage() : timers_([] { exec_sync(Exec{}); }) {}
+
+  void upload(const Model& m) {
+    const ContactModel& c = m.contact;
+    nv_ = m.n_vertices();
+    nfv_ = m.n_free_vertices;
+    ntri_ = static_cast<std::int64_t>(c.tri_v.size());
+    ne_ = static_cast<std::int64_t>(c.edges.size());
+    np_ = static_cast<std::int64_t>(c.prim_v.size());
+    npf_ = c.n_free_prims;
+    nwv_ = static_cast<std::int64_t>(c.wall_vertices.size());
+    nw_ = static_cast<std::int64_t>(c.walls.size());
+    d_dem_ = c.d_dem;
+    self_ = c.self_contact;
+    kn_factor_ = c.kn_factor;
+    kt_ratio_ = c.kt_ratio;
+    nm_ = c.n_mat;
+    std::vector<std::int32_t> tv(3 * ntri_), ev(2 * ne_), pv(4 * np_);
+    for (std::int64_t s = 0; s < ntri_; ++s)
+      for (int k = 0; k < 3; ++k) tv[k * ntri_ + s] = c.tri_v[s][k];
+    for (std::int64_t e = 0; e < ne_; ++e)
+      for (int k = 0; k < 2; ++k) ev[k * ne_ + e] = c.edges[e][k];
+    for (std::int64_t p = 0; p < np_; ++p)
+      for (int k = 0; k < 4; ++k) pv[k * np_ + p] = c.prim_v[p][k];
+    tri_v_.assign(tv);
+    edge_v_.assign(ev);
+    prim_v_.assign(pv);
+    tri_body_.assign(c.tri_body);
+    prim_body_.assign(c.prim_body);
+    own_v_off_.assign(c.own_v_off);
+    own_e_off_.assign(c.own_e_off);
+    own_v_.assign(c.own_v);
+    own_e_.assign(c.own_e);
+    prim_tri_off_.assign(c.prim_tri_off);
+    prim_tri_.assign(c.prim_tri);
+    wall_v_.assign(c.wall_vertices);
+    body_h_.assign(c.body_h);
+    body_fixed_.assign(std::vector<std::int32_t>(c.body_fixed.begin(), c.body_fixed.end()));
+    body_mat_.assign(c.body_mat);
+    pair_mu_.assign(c.pair_mu);
+    pair_zeta_.assign(c.pair_zeta);
+    pair_kn_.assign(c.pair_kn);
+    pair_E_.assign(c.pair_E);
+    std::vector<double> wall(8 * nw_);
+    for (std::int64_t w = 0; w < nw_; ++w) {
+      const ContactWall& cw = c.walls[w];
+      const double vals[8] = {cw.point.x,  cw.point.y, cw.point.z, cw.normal.x,
+                              cw.normal.y, cw.normal.z, cw.mu,     cw.zeta};
+      for (int k = 0; k < 8; ++k) wall[8 * w + k] = vals[k];
+    }
+    wall_.assign(wall);
+    std::vector<double> wk(nw_);
+    for (std::int64_t w = 0; w < nw_; ++w) wk[w] = c.walls[w].stiffness;
+    wall_kn_.assign(wk);
+    vertex_body_.assign(m.body);
+    inv_mass_.assign(m.inv_mass);
+    pc_.resize(np_);
+    pr_.resize(np_);
+    cnt_.resize(np_ + nwv_ + 1);
+    vcnt_.resize(nv_ + 1);
+    vcur_.resize(nv_);
+    n_prev_ = 0;
+  }
+
+  // f[i] += contact force on vertex i, for free vertices i < n_free_vertices. dt > 0 advances
+  // the tangential springs (dynamics); dt = 0 leaves them (relaxation, the first evaluation).
+  void add_forces(Vec3CView x, Vec3CView v, Vec3View f, double dt) {
+    std::int64_t npairs = 0;
+    {
+      auto scope = timers_.scope("contact.broad");
+      npairs = broad_phase(x);
+    }
+    std::int64_t nc = 0;
+    {
+      auto scope = timers_.scope("contact.narrow");
+      nc = narrow_phase(x);
+    }
+    {
+      auto scope = timers_.scope("contact.force");
+      forces(x, v, f, dt, nc);
+    }
+    stats_.pairs = npairs;
+    stats_.contacts = nc;
+    ++steps_;
+  }
+
+  const std::map<std::string, double>& seconds() const { return timers_.seconds(); }
+  const ContactStepStats& stats() const { return stats_; }
+  double max_overlap_ever() const { return max_overlap_ever_; }
+  std::int64_t steps() const { return steps_; }
+  std::size_t bytes() const {
+    return tri_v_.bytes() + edge_v_.bytes() + prim_v_.bytes() + tri_body_.bytes() + prim_body_.bytes() +
+           own_v_off_.bytes() + own_e_off_.bytes() + own_v_.bytes() + own_e_.bytes() +
+           prim_tri_off_.bytes() + prim_tri_.bytes() + pc_.bytes() + pr_.bytes() + cnt_.bytes() +
+           rec_.bytes() + ent_f_.bytes() + ent_v_.bytes() + vcnt_.bytes() + vcur_.bytes() +
+           vent_.bytes() + pact_.bytes() + nact_.bytes() + pk1_.bytes() + pk2_.bytes() + pxi_.bytes() + nk1_.bytes() + nk2_.bytes() +
+           nxi_.bytes() + cells_.bytes() + pairs_.bytes();
+  }
+
+  ContactTopology topology() const {
+    ContactTopology t;
+    t.tri_v = tri_v_.cview();
+    t.ntri = ntri_;
+    t.tri_body = tri_body_.cview();
+    t.edge_v = edge_v_.cview();
+    t.ne = ne_;
+    t.own_v_off = own_v_off_.cview();
+    t.own_e_off = own_e_off_.cview();
+    t.prim_tri_off = prim_tri_off_.cview();
+    t.own_v = own_v_.cview();
+    t.own_e = own_e_.cview();
+    t.prim_tri = prim_tri_.cview();
+    t.body_h = body_h_.cview();
+    t.d_dem = d_dem_;
+    t.self_contact = self_;
+    return t;
+  }
+
+  // Candidate pairs of the last broad phase (tests compare them with brute force).
+  const CandidatePairs<Exec>& pairs() const { return pairs_; }
+  Vec3CView centroids() const { return pc_.cview(); }
+  View<const double> radii() const { return pr_.cview(); }
+  std::int64_t n_primitives() const { return np_; }
+  // The last step's records, sorted by key (host copy; tests and diagnostics).
+  std::vector<ContactRecord> records() const {
+    std::vector<ContactRecord> r = rec_.to_host();
+    r.resize(stats_.contacts);
+    return r;
+  }
+
+  // The phases are public only because nvcc requires the enclosing function of an extended
+  // __host__ __device__ lambda to be public (the CUDA build fails otherwise).
+  std::int64_t broad_phase(Vec3CView x) {
+    if (np_ == 0) return 0;
+    const std::int64_t np = np_;
+    const auto pv = prim_v_.cview();
+    const auto pc = pc_.view();
+    const auto pr = pr_.view();
+    for_each(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) {
+      Vec3 q[4];
+      int k = 0;
+      Vec3 c{};
+      for (; k < 4; ++k) {
+        const int i = pv[k * np + p];
+        if (i < 0) break;
+        q[k] = x[i];
+        c += q[k];
+      }
+      c = c / static_cast<double>(k);
+      double r2 = 0;
+      for (int j = 0; j < k; ++j) {
+        const double d2 = norm2(q[j] - c);
+        r2 = d2 > r2 ? d2 : r2;
+      }
+      pc.set(p, c);
+      pr[p] = sqrt(r2);
+    });
+    const auto cc = pc_.cview();
+    const auto rr = pr_.cview();
+    Vec3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      const double* ca = a == 0 ? cc.x : (a == 1 ? cc.y : cc.z);
+      hi[a] = reduce_max(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return ca[p]; }, -1e300);
+      lo[a] = -reduce_max(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return -ca[p]; }, -1e300);
+    }
+    const double rmax = reduce_max(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return rr[p]; }, 0.0);
+    // Report eq. 9-10: L_cell >= D_max + D_DEM with D_max = 2 max r.
+    const double L = (2 * rmax + d_dem_) * (1 + 1e-9) + 1e-300;
+    cells_.set_grid(cover_capped(lo, hi, L, 4 * np + 64));
+    cells_.build(cc);
+    const auto pb = prim_body_.cview();
+    const auto fixed = body_fixed_.cview();
+    const bool self = self_;
+    const auto pvv = pv;
+    // Only primitives of free bodies start a pair (they come first): a fixed-fixed pair is
+    // never needed, and a free-fixed pair (i < npf <= j) is found from its free side.
+    return pairs_.build(cells_, cc, rr, d_dem_, npf_, QDEMSPH_LAMBDA(std::int64_t i, std::int64_t j)->bool {
+      const int bi = pb[i], bj = pb[j];
+      if (fixed[bi] && fixed[bj]) return false;
+      if (bi != bj) return true;
+      if (!self) return false;
+      // Self-contact: primitives sharing a vertex are neighbours in the mesh, not a touch.
+      for (int a = 0; a < 4; ++a) {
+        const int va = pvv[a * np + i];
+        if (va < 0) break;
+        for (int b = 0; b < 4; ++b)
+          if (pvv[b * np + j] == va) return false;
+      }
+      return true;
+    });
+  }
+
+  // Records of all contacts, sorted by key, duplicates of one touch deactivated.
+  std::int64_t narrow_phase(Vec3CView x) {
+    const ContactTopology topo = topology();
+    const std::int64_t np = npf_, nwv = nwv_, nw = nw_;  // pairs start at free primitives
+    const auto ps = pairs_.start();
+    const auto sec = pairs_.second();
+    const auto pto = prim_tri_off_.cview();
+    const auto pt = prim_tri_.cview();
+    const auto wv = wall_v_.cview();
+    const auto wall = wall_.cview();
+    const auto vb = vertex_body_.cview();
+    const double d_dem = d_dem_;
+    auto prim_contacts = QDEMSPH_LAMBDA(std::int64_t i, ContactRecord* out)->std::int64_t {
+      std::int64_t n = 0;
+      for (std::int64_t q = ps[i]; q < ps[i + 1]; ++q) {
+        const int j = sec[q];
+        for (std::int64_t ta = pto[i]; ta < pto[i + 1]; ++ta)
+          for (std::int64_t tb = pto[j]; tb < pto[j + 1]; ++tb)
+            n += topo.narrow_tris(x, pt[ta], pt[tb], out ? out + n : nullptr);
+      }
+      return n;
+    };
+    auto wall_contacts = QDEMSPH_LAMBDA(std::int64_t k, ContactRecord* out)->std::int64_t {
+      const int A = wv[k];
+      const Vec3 xa = x[A];
+      std::int64_t n = 0;
+      for (std::int64_t w = 0; w < nw; ++w) {
+        const Vec3 p{wall[8 * w], wall[8 * w + 1], wall[8 * w + 2]};
+        const Vec3 nn{wall[8 * w + 3], wall[8 * w + 4], wall[8 * w + 5]};
+        const double s = dot(xa - p, nn);
+        if (!(s < d_dem)) continue;
+        if (out) {
+          ContactRecord& r = out[n];
+          r = ContactRecord{};
+          r.type = kWall;
+          r.k1 = contact_key1(kWall, static_cast<std::uint64_t>(A));
+          r.k2 = static_cast<std::uint64_t>(w);
+          r.v[0] = A;
+          r.w[0] = 1;
+          r.n = nn;
+          r.d = s;
+          r.n1 = 1;
+          r.body1 = vb[A];
+          r.body2 = -1;
+          r.wall = static_cast<std::int32_t>(w);
+        }
+        ++n;
+      }
+      return n;
+    };
+    const auto cnt = cnt_.view();
+    for_each(Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
+      cnt[i] = i < np ? prim_contacts(i, nullptr) : wall_contacts(i - np, nullptr);
+    });
+    const std::int64_t nc = exclusive_scan(Exec{}, cnt, np + nwv);
+    if (rec_.size() < nc) rec_.resize(nc + nc / 4 + 64);
+    const auto rec = rec_.view();
+    for_each(Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
+      ContactRecord* out = rec.p + cnt[i];
+      if (i < np)
+        prim_contacts(i, out);
+      else
+        wall_contacts(i - np, out);
+    });
+    sort_records(Exec{}, rec, nc);
+    // One vertex touching one body: keep the point-face hit with the largest gap.
+    for_each(Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
+      ContactRecord& r = rec[c];
+      if (r.type != kPointFace) return;
+      bool keep = true;
+      for (std::int64_t o = c - 1; o >= 0 && rec[o].k1 == r.k1 && keep; --o)
+        if (rec[o].body2 == r.body2 && rec[o].d >= r.d) keep = false;  // lower key wins ties
+      for (std::int64_t o = c + 1; o < nc && rec[o].k1 == r.k1 && keep; ++o)
+        if (rec[o].body2 == r.body2 && rec[o].d > r.d) keep = false;
+      r.active = keep ? 1 : 0;
+    });
+    return nc;
+  }
+
+  void forces(Vec3CView x, Vec3CView v, Vec3View f, double dt, std::int64_t nc) {
+    (void)x;
+    if (ent_v_.size() < 4 * nc) {
+      ent_v_.resize(4 * nc + nc + 64);
+      ent_f_.resize(4 * nc + nc + 64);
+      vent_.resize(4 * nc + nc + 64);
+    }
+    if (nk1_.size() < nc) {
+      nact_.resize(nc + nc / 4 + 64);
+      nk1_.resize(nc + nc / 4 + 64);
+      nk2_.resize(nc + nc / 4 + 64);
+      nxi_.resize(nc + nc / 4 + 64);
+    }
+    const auto rec = rec_.cview();
+    const auto im = inv_mass_.cview();
+    const auto bmat = body_mat_.cview();
+    const auto bh = body_h_.cview();
+    const auto pmu = pair_mu_.cview(), pzeta = pair_zeta_.cview(), pkn = pair_kn_.cview(),
+               pE = pair_E_.cview();
+    const auto wall = wall_.cview();
+    const auto wkn = wall_kn_.cview();
+    const auto pk1 = pk1_.cview(), pk2 = pk2_.cview();
+    const auto pxi = pxi_.cview();
+    const auto pact = pact_.cview();
+    const std::int64_t nprev = n_prev_;
+    const auto nk1 = nk1_.view(), nk2 = nk2_.view();
+    const auto nxi = nxi_.view();
+    const auto nact = nact_.view();
+    const auto ev = ent_v_.view();
+    const auto ef = ent_f_.view();
+    const int nm = nm_;
+    const double d_dem = d_dem_, knf = kn_factor_, ktr = kt_ratio_;
+    for_each(Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
+      const ContactRecord& r = rec[c];
+      nk1[c] = r.k1;
+      nk2[c] = r.k2;
+      nxi.set(c, Vec3{});
+      nact[c] = 0;
+      for (int k = 0; k < 4; ++k) ev[4 * c + k] = -1;
+      if (!r.active) return;
+      Vec3 v1{}, v2{};
+      double im1 = 0, im2 = 0;
+      for (int k = 0; k < 4; ++k) {
+        const int i = r.v[k];
+        if (i < 0) continue;
+        if (k < r.n1) {
+          v1 += r.w[k] * v[i];
+          im1 += r.w[k] * im[i];
+        } else {
+          v2 += r.w[k] * v[i];
+          im2 += r.w[k] * im[i];
+        }
+      }
+      const double inv_eff = im1 + im2;
+      if (!(inv_eff > 0)) return;  // both sides immobile
+      ContactLaw law;
+      const int m1 = bmat[r.body1];
+      if (r.body2 < 0) {
+        const std::int64_t w = r.wall;
+        law.mu = wall[8 * w + 6];
+        law.zeta = wall[8 * w + 7];
+        law.kn = wkn[w] > 0 ? wkn[w] : knf * pE[m1 * nm + m1] * bh[r.body1];
+      } else {
+        const int mp = m1 * nm + bmat[r.body2];
+        const double h1 = bh[r.body1], h2 = bh[r.body2];
+        law.mu = pmu[mp];
+        law.zeta = pzeta[mp];
+        law.kn = pkn[mp] > 0 ? pkn[mp] : knf * pE[mp] * (h1 < h2 ? h1 : h2);
+      }
+      law.kt = ktr * law.kn;
+      // Tangential history of this feature pair from the previous step (sorted keys).
+      Vec3 xi{};
+      std::int64_t lo = 0, hi = nprev;
+      while (lo < hi) {
+        const std::int64_t mid = (lo + hi) / 2;
+        if (pk1[mid] < r.k1 || (pk1[mid] == r.k1 && pk2[mid] < r.k2))
+          lo = mid + 1;
+        else
+          hi = mid;
+      }
+      const bool known = lo < nprev && pk1[lo] == r.k1 && pk2[lo] == r.k2 && pact[lo];
+      if (known) xi = pxi[lo];
+      // A touch starts with a gap above -D_DEM; a deeper one must have been a contact the
+      // step before (continuity). Otherwise it is the back face of a thin body seen through
+      // it, not a penetration.
+      if (r.d < -d_dem && !known) return;
+      nact[c] = 1;
+      const ContactForce cf = contact_force(law, r.n, d_dem - r.d, v1 - v2, xi, dt, 1.0 / inv_eff);
+      if (dt > 0) nxi.set(c, cf.xi); else nxi.set(c, xi);
+      for (int k = 0; k < 4; ++k) {
+        ev[4 * c + k] = r.v[k];
+        ef.set(4 * c + k, (k < r.n1 ? r.w[k] : -r.w[k]) * cf.f);
+      }
+    });
+    // The keys and springs become the next step's history (already sorted).
+    std::swap(pk1_, nk1_);
+    std::swap(pk2_, nk2_);
+    std::swap(pxi_, nxi_);
+    std::swap(pact_, nact_);
+    n_prev_ = nc;
+
+    // Gather per vertex: count, scan, fill, sort each vertex's entries, sum.
+    const std::int64_t nv = nv_, ne4 = 4 * nc;
+    const auto vcnt = vcnt_.view();
+    const auto vcur = vcur_.view();
+    const auto vent = vent_.view();
+    const auto evc = ent_v_.cview();
+    const auto efc = ent_f_.cview();
+    for_each(Exec{}, nv + 1, QDEMSPH_LAMBDA(std::int64_t i) { vcnt[i] = 0; });
+    for_each(Exec{}, nv, QDEMSPH_LAMBDA(std::int64_t i) { vcur[i] = 0; });
+    for_each(Exec{}, ne4, QDEMSPH_LAMBDA(std::int64_t e) {
+      if (evc[e] >= 0) atomic_inc(&vcnt[evc[e]]);
+    });
+    exclusive_scan(Exec{}, vcnt, nv);
+    for_each(Exec{}, ne4, QDEMSPH_LAMBDA(std::int64_t e) {
+      const int i = evc[e];
+      if (i >= 0) vent[vcnt[i] + atomic_inc(&vcur[i])] = static_cast<int>(e);
+    });
+    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+      const int b = vcnt[i], e = vcnt[i + 1];
+      if (b == e) return;
+      for (int k = b + 1; k < e; ++k) {  // insertion sort: a vertex has few entries
+        const int val = vent[k];
+        int j = k - 1;
+        while (j >= b && vent[j] > val) {
+          vent[j + 1] = vent[j];
+          --j;
+        }
+        vent[j + 1] = val;
+      }
+      Vec3 s{};
+      for (int k = b; k < e; ++k) s += efc[vent[k]];
+      f.set(i, f[i] + s);
+    });
+    const auto pxc = rec_.cview();
+    const auto act = pact_.cview();  // this step's, after the swap
+    stats_.active = static_cast<std::int64_t>(reduce_sum(Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
+      return static_cast<double>(act[c]);
+    }));
+    stats_.max_overlap = reduce_max(Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
+      return act[c] ? d_dem - pxc[c].d : 0.0;
+    }, 0.0);
+    if (stats_.max_overlap > max_overlap_ever_) max_overlap_ever_ = stats_.max_overlap;
+  }
+
+ private:
+  std::int64_t nv_ = 0, nfv_ = 0, ntri_ = 0, ne_ = 0, np_ = 0, npf_ = 0, nwv_ = 0, nw_ = 0, n_prev_ = 0;
+  double d_dem_ = 0, kn_factor_ = 0.5, kt_ratio_ = 2.0 / 7.0;
+  bool self_ = false;
+  int nm_ = 0;
+  Buffer<std::int32_t> tri_v_{S}, edge_v_{S}, prim_v_{S}, tri_body_{S}, prim_body_{S}, own_v_{S},
+      own_e_{S}, prim_tri_{S}, wall_v_{S}, body_fixed_{S}, body_mat_{S}, vertex_body_{S};
+  Buffer<std::int64_t> own_v_off_{S}, own_e_off_{S}, prim_tri_off_{S}, cnt_{S};
+  Buffer<double> body_h_{S}, pair_mu_{S}, pair_zeta_{S}, pair_kn_{S}, pair_E_{S}, wall_{S},
+      wall_kn_{S}, inv_mass_{S}, pr_{S};
+  Vec3Buffer pc_{S};
+  CellList<Exec> cells_;
+  CandidatePairs<Exec> pairs_;
+  Buffer<ContactRecord> rec_{S};
+  Buffer<int> ent_v_{S}, vcnt_{S}, vcur_{S}, vent_{S};
+  Vec3Buffer ent_f_{S};
+  Buffer<std::uint64_t> pk1_{S}, pk2_{S}, nk1_{S}, nk2_{S};
+  Buffer<int> pact_{S}, nact_{S};
+  Vec3Buffer pxi_{S}, nxi_{S};
+  ContactStepStats stats_;
+  double max_overlap_ever_ = 0;
+  std::int64_t steps_ = 0;
+  PhaseTimers timers_;
+};
+
+}  // namespace qdemsph

@@ -1,0 +1,136 @@
+// The CUDA launch layer, twin of exec_host.hpp: stage code written once against
+// for_each / reduce_sum / reduce_max runs here as CUDA kernels. nvcc only (.cu files).
+//
+//  - for_each(CudaExec, n, f): a grid-stride kernel, 256 threads a block, at most
+//    32 blocks per SM (4 waves of 8 resident blocks), f(i) once for every i in [0, n).
+//    Asynchronous: the host does not wait; exec_sync() waits and reports kernel faults.
+//  - reduce_sum / reduce_max: two levels. Level 1: B = min(ceil(n / 256), 1024) blocks,
+//    thread j of block b folds i = b*256 + j, + 256 B, ... in increasing order, then a CUB
+//    BlockReduce (fixed tree for a fixed block size) gives one partial per block. Level 2:
+//    one block folds the B partials the same way. B depends on n only, so the result has
+//    the same bits on every run and on every GPU for a given n (it differs from the host's
+//    OpenMP order by round-off). The result returns to the host (a synchronising copy).
+// Kernel launch errors and asynchronous faults become std::runtime_error naming the call.
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include <cstdint>
+#include <cub/block/block_reduce.cuh>
+
+#include "core/hd.hpp"
+#include "core/memory.hpp"
+
+namespace qdemsph {
+
+struct CudaExec {
+  static constexpr Space space = Space::Cuda;
+};
+
+// Throws std::runtime_error "CUDA error in WHAT (file:line): cudaErrorName: description"
+// (InputError for an out-of-memory allocation: the problem is too large for the GPU).
+[[noreturn]] void cuda_fail(cudaError_t e, const char* what, const char* file, int line);
+
+#define QDEMSPH_CUDA_CHECK(call, what)                                         \
+  do {                                                                         \
+    const cudaError_t qdemsph_err_ = (call);                                   \
+    if (qdemsph_err_ != cudaSuccess)                                           \
+      ::qdemsph::cuda_fail(qdemsph_err_, what, __FILE__, __LINE__);            \
+  } while (0)
+
+// memory_cuda.cu: the grid cap for for_each (32 blocks per SM of the current device) and a
+// device scratch of cuda_detail::kMaxPartials + 1 doubles for the reductions.
+int cuda_grid_cap();
+double* cuda_reduce_scratch();
+
+namespace cuda_detail {
+
+inline constexpr int kBlock = 256;
+inline constexpr int kMaxPartials = 1024;
+
+template <class F>
+__global__ void __launch_bounds__(kBlock) for_each_kernel(std::int64_t n, F f) {
+  const std::int64_t stride = static_cast<std::int64_t>(blockDim.x) * gridDim.x;
+  for (std::int64_t i = static_cast<std::int64_t>(blockIdx.x) * blockDim.x + threadIdx.x; i < n;
+       i += stride)
+    f(i);
+}
+
+struct SumOp {
+  __device__ __forceinline__ double operator()(double acc, double v) const { return acc + v; }
+};
+// Same rule as the host loop (m = v > m ? v : m): a NaN value never becomes the maximum.
+struct MaxOp {
+  __device__ __forceinline__ double operator()(double acc, double v) const {
+    return v > acc ? v : acc;
+  }
+};
+
+template <class F, class Op>
+__global__ void __launch_bounds__(kBlock)
+    reduce_kernel(std::int64_t n, F f, Op op, double init, double* partial) {
+  double acc = init;
+  const std::int64_t stride = static_cast<std::int64_t>(kBlock) * gridDim.x;
+  for (std::int64_t i = static_cast<std::int64_t>(blockIdx.x) * kBlock + threadIdx.x; i < n;
+       i += stride)
+    acc = op(acc, f(i));
+  using BlockReduce = cub::BlockReduce<double, kBlock>;
+  __shared__ typename BlockReduce::TempStorage tmp;
+  const double r = BlockReduce(tmp).Reduce(acc, op);
+  if (threadIdx.x == 0) partial[blockIdx.x] = r;
+}
+
+template <class Op>
+__global__ void __launch_bounds__(kBlock)
+    reduce_finish_kernel(int m, Op op, double init, const double* partial, double* out) {
+  double acc = init;
+  for (int i = threadIdx.x; i < m; i += kBlock) acc = op(acc, partial[i]);
+  using BlockReduce = cub::BlockReduce<double, kBlock>;
+  __shared__ typename BlockReduce::TempStorage tmp;
+  const double r = BlockReduce(tmp).Reduce(acc, op);
+  if (threadIdx.x == 0) *out = r;
+}
+
+template <class F, class Op>
+double reduce(std::int64_t n, F f, Op op, double init) {
+  if (n <= 0) return init;
+  const std::int64_t want = (n + kBlock - 1) / kBlock;
+  const int blocks = static_cast<int>(want < kMaxPartials ? want : kMaxPartials);
+  double* scratch = cuda_reduce_scratch();
+  reduce_kernel<<<blocks, kBlock>>>(n, f, op, init, scratch);
+  QDEMSPH_CUDA_CHECK(cudaGetLastError(), "reduce_kernel launch");
+  reduce_finish_kernel<<<1, kBlock>>>(blocks, op, init, scratch, scratch + kMaxPartials);
+  QDEMSPH_CUDA_CHECK(cudaGetLastError(), "reduce_finish_kernel launch");
+  double h = init;
+  QDEMSPH_CUDA_CHECK(cudaMemcpy(&h, scratch + kMaxPartials, sizeof(double), cudaMemcpyDeviceToHost),
+                     "reduction result copy (an earlier kernel may have faulted)");
+  return h;
+}
+
+}  // namespace cuda_detail
+
+template <class F>
+void for_each(CudaExec, std::int64_t n, F f) {
+  if (n <= 0) return;
+  const std::int64_t want = (n + cuda_detail::kBlock - 1) / cuda_detail::kBlock;
+  const std::int64_t cap = cuda_grid_cap();
+  const int blocks = static_cast<int>(want < cap ? want : cap);
+  cuda_detail::for_each_kernel<<<blocks, cuda_detail::kBlock>>>(n, f);
+  QDEMSPH_CUDA_CHECK(cudaGetLastError(), "for_each kernel launch");
+}
+
+template <class F>
+double reduce_sum(CudaExec, std::int64_t n, F f) {
+  return cuda_detail::reduce(n, f, cuda_detail::SumOp{}, 0.0);
+}
+
+template <class F>
+double reduce_max(CudaExec, std::int64_t n, F f, double init) {
+  return cuda_detail::reduce(n, f, cuda_detail::MaxOp{}, init);
+}
+
+inline void exec_sync(CudaExec) {
+  QDEMSPH_CUDA_CHECK(cudaDeviceSynchronize(), "kernel execution (exec_sync)");
+}
+
+}  // namespace qdemsph

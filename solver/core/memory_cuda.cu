@@ -1,0 +1,157 @@
+// Device memory for Buffer<T> (memory.hpp) and the CUDA runtime services the launch layer
+// needs: error reporting, the grid cap, the reduction scratch, and what the GPU offers.
+// One GPU per process: the current device (cudaSetDevice by the caller, default 0).
+#include <cuda_runtime.h>
+
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+#include "core/error.hpp"
+#include "core/exec_cuda.cuh"
+#include "core/gpu_info.hpp"
+#include "core/memory.hpp"
+
+namespace qdemsph {
+
+namespace {
+
+std::string mib(std::size_t b) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.1f MiB", b / 1048576.0);
+  return buf;
+}
+
+}  // namespace
+
+void cuda_fail(cudaError_t e, const char* what, const char* file, int line) {
+  std::string msg = std::string("CUDA error in ") + what + " (" + file + ":" +
+                    std::to_string(line) + "): " + cudaGetErrorName(e) + ": " +
+                    cudaGetErrorString(e);
+  if (e == cudaErrorMemoryAllocation) throw InputError(msg);
+  throw std::runtime_error(msg);
+}
+
+bool cuda_available() {
+  static const bool ok = [] {
+    int n = 0;
+    const cudaError_t e = cudaGetDeviceCount(&n);
+    if (e != cudaSuccess) {
+      cudaGetLastError();  // clear: "no device" is an answer, not a fault
+      return false;
+    }
+    return n > 0;
+  }();
+  return ok;
+}
+
+void* cuda_alloc(std::size_t bytes) {
+  if (!cuda_available())
+    throw InputError("the CUDA backend needs a GPU, and this machine has none visible "
+                     "(check nvidia-smi and CUDA_VISIBLE_DEVICES)");
+  void* p = nullptr;
+  const cudaError_t e = cudaMalloc(&p, bytes);
+  if (e == cudaErrorMemoryAllocation) {
+    cudaGetLastError();
+    std::size_t free_b = 0, total_b = 0;
+    cudaMemGetInfo(&free_b, &total_b);
+    throw InputError("the problem does not fit on the GPU: allocating " + mib(bytes) +
+                     " failed with " + mib(free_b) + " free of " + mib(total_b) +
+                     " (use a coarser mesh or more GPUs)");
+  }
+  QDEMSPH_CUDA_CHECK(e, "cudaMalloc");
+  return p;
+}
+
+void cuda_free(void* p) noexcept {
+  if (p) cudaFree(p);  // errors at teardown (driver already unloaded) are ignored
+}
+
+void cuda_copy(void* dst, Space, const void* src, Space, std::size_t bytes) {
+  // Unified addressing: the runtime infers the direction from the pointers.
+  QDEMSPH_CUDA_CHECK(cudaMemcpy(dst, src, bytes, cudaMemcpyDefault), "cudaMemcpy");
+}
+
+void cuda_zero(void* p, std::size_t bytes) {
+  QDEMSPH_CUDA_CHECK(cudaMemset(p, 0, bytes), "cudaMemset");
+}
+
+int cuda_grid_cap() {
+  static const int cap = [] {
+    int dev = 0, sms = 0;
+    QDEMSPH_CUDA_CHECK(cudaGetDevice(&dev), "cudaGetDevice");
+    QDEMSPH_CUDA_CHECK(cudaDeviceGetAttribute(&sms, cudaDevAttrMultiProcessorCount, dev),
+                       "cudaDeviceGetAttribute");
+    return 32 * (sms > 0 ? sms : 1);
+  }();
+  return cap;
+}
+
+namespace {
+struct ReduceScratch {
+  double* p = nullptr;
+  ~ReduceScratch() { cuda_free(p); }
+};
+}  // namespace
+
+double* cuda_reduce_scratch() {
+  static ReduceScratch s;
+  if (!s.p)
+    s.p = static_cast<double*>(cuda_alloc(sizeof(double) * (cuda_detail::kMaxPartials + 1)));
+  return s.p;
+}
+
+GpuInfo gpu_info() {
+  GpuInfo g;
+  cudaRuntimeGetVersion(&g.runtime_version);
+  cudaDriverGetVersion(&g.driver_version);
+  const cudaError_t e = cudaGetDeviceCount(&g.device_count);
+  if (e != cudaSuccess || g.device_count == 0) {
+    cudaGetLastError();
+    g.why = e != cudaSuccess ? std::string(cudaGetErrorName(e)) + ": " + cudaGetErrorString(e)
+                             : "no CUDA device visible";
+    return g;
+  }
+  cudaDeviceProp p{};
+  if (cudaGetDevice(&g.device) != cudaSuccess ||
+      cudaGetDeviceProperties(&p, g.device) != cudaSuccess ||
+      cudaMemGetInfo(&g.free_bytes, &g.total_bytes) != cudaSuccess) {
+    g.why = std::string("CUDA runtime error: ") + cudaGetErrorString(cudaGetLastError());
+    return g;
+  }
+  g.available = true;
+  g.name = p.name;
+  g.sm_count = p.multiProcessorCount;
+  g.cc_major = p.major;
+  g.cc_minor = p.minor;
+  return g;
+}
+
+double gpu_copy_bandwidth(std::size_t bytes, int reps) {
+  if (!cuda_available()) return 0.0;
+  void* a = cuda_alloc(bytes);
+  void* b = cuda_alloc(bytes);
+  cudaEvent_t e0, e1;
+  QDEMSPH_CUDA_CHECK(cudaEventCreate(&e0), "cudaEventCreate");
+  QDEMSPH_CUDA_CHECK(cudaEventCreate(&e1), "cudaEventCreate");
+  QDEMSPH_CUDA_CHECK(cudaMemset(a, 1, bytes), "cudaMemset");
+  QDEMSPH_CUDA_CHECK(cudaMemcpy(b, a, bytes, cudaMemcpyDeviceToDevice), "cudaMemcpy (warm-up)");
+  float best_ms = 0;
+  for (int r = 0; r < reps; ++r) {
+    QDEMSPH_CUDA_CHECK(cudaEventRecord(e0), "cudaEventRecord");
+    QDEMSPH_CUDA_CHECK(cudaMemcpy(r % 2 ? a : b, r % 2 ? b : a, bytes, cudaMemcpyDeviceToDevice),
+                       "cudaMemcpy (device to device)");
+    QDEMSPH_CUDA_CHECK(cudaEventRecord(e1), "cudaEventRecord");
+    QDEMSPH_CUDA_CHECK(cudaEventSynchronize(e1), "cudaEventSynchronize");
+    float ms = 0;
+    QDEMSPH_CUDA_CHECK(cudaEventElapsedTime(&ms, e0, e1), "cudaEventElapsedTime");
+    if (r == 0 || ms < best_ms) best_ms = ms;
+  }
+  cudaEventDestroy(e0);
+  cudaEventDestroy(e1);
+  cuda_free(a);
+  cuda_free(b);
+  return best_ms > 0 ? 2.0 * bytes / (best_ms * 1e-3) : 0.0;
+}
+
+}  // namespace qdemsph

@@ -1,0 +1,121 @@
+// Uniform cell grid and counting-sort cell list (count, exclusive scan, fill), written for the
+// SPH stage and meant to be shared with the contact broad phase.
+//
+// Layout: after build(), particles are described by `order` (particle indices sorted by cell,
+// stable: increasing index within a cell) and `start` (ncells + 1 offsets): the particles of cell
+// c are order[start[c] .. start[c+1]). Callers that keep their arrays sorted by cell (the SPH
+// stage re-sorts every step) use start directly as ranges into their own arrays.
+//
+// Positions outside the grid box are clamped into the border cells. Clamping is non-expansive,
+// so two points closer than one cell width still land in the same or adjacent cells: the search
+// stays exact, it only gets slower for far-away particles.
+//
+// The cell-key pass is a for_each (host or device); count/scan/fill is orchestration, done
+// serially on the host here (deterministic order). A CUDA twin (atomic count, device scan,
+// stable key sort) belongs next to exec_cuda.cuh.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "core/hd.hpp"
+#include "core/memory.hpp"
+#include "core/vec.hpp"
+
+namespace qdemsph {
+
+struct CellGrid {
+  Vec3 origin{0, 0, 0};
+  double cell = 1, inv_cell = 1;
+  int n[3] = {1, 1, 1};
+
+  // A grid covering [lo, hi] with cells of at least `min_cell`.
+  static CellGrid cover(Vec3 lo, Vec3 hi, double min_cell) {
+    CellGrid g;
+    g.origin = lo;
+    g.cell = min_cell;
+    g.inv_cell = 1.0 / min_cell;
+    for (int a = 0; a < 3; ++a)
+      g.n[a] = std::max(1, static_cast<int>(std::ceil((hi[a] - lo[a]) / min_cell)));
+    return g;
+  }
+  std::int64_t count() const { return std::int64_t(n[0]) * n[1] * n[2]; }
+  QDEMSPH_HD int coord(double x, int a) const {
+    const double o = a == 0 ? origin.x : (a == 1 ? origin.y : origin.z);
+    int c = static_cast<int>(floor((x - o) * inv_cell));
+    c = c < 0 ? 0 : c;
+    return c >= n[a] ? n[a] - 1 : c;
+  }
+  QDEMSPH_HD std::int64_t key(int cx, int cy, int cz) const {
+    return (std::int64_t(cz) * n[1] + cy) * n[0] + cx;
+  }
+  QDEMSPH_HD std::int64_t key_of(Vec3 p) const {
+    return key(coord(p.x, 0), coord(p.y, 1), coord(p.z, 2));
+  }
+};
+
+// Calls f(j) for every j in the 27 cells around p (ranges into arrays sorted by cell).
+template <class F>
+QDEMSPH_HD void for_each_near(const CellGrid& g, const std::int64_t* start, Vec3 p, F&& f) {
+  const int cx = g.coord(p.x, 0), cy = g.coord(p.y, 1), cz = g.coord(p.z, 2);
+  for (int z = cz - 1; z <= cz + 1; ++z) {
+    if (z < 0 || z >= g.n[2]) continue;
+    for (int y = cy - 1; y <= cy + 1; ++y) {
+      if (y < 0 || y >= g.n[1]) continue;
+      const std::int64_t row = g.key(0, y, z);
+      const int x0 = cx > 0 ? cx - 1 : 0, x1 = cx + 1 < g.n[0] ? cx + 1 : g.n[0] - 1;
+      // Cells x0..x1 of one row are contiguous in the sorted order: one range.
+      for (std::int64_t j = start[row + x0]; j < start[row + x1 + 1]; ++j) f(j);
+    }
+  }
+}
+
+// Counting sort of keys in [0, ncells): stable permutation `order` and offsets `start`.
+inline void counting_sort_host(const std::vector<std::int64_t>& keys, std::int64_t ncells,
+                               std::vector<std::int64_t>& start, std::vector<std::int64_t>& order) {
+  const std::int64_t n = static_cast<std::int64_t>(keys.size());
+  start.assign(ncells + 1, 0);
+  for (std::int64_t i = 0; i < n; ++i) ++start[keys[i] + 1];          // count
+  for (std::int64_t c = 0; c < ncells; ++c) start[c + 1] += start[c];  // exclusive scan
+  std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
+  order.resize(n);
+  for (std::int64_t i = 0; i < n; ++i) order[fill[keys[i]]++] = i;     // fill
+}
+
+// Cell list over a Vec3 field in memory space S: keys on the device, sort on the host.
+template <class Exec>
+class CellList {
+  static constexpr Space S = Exec::space;
+
+ public:
+  void set_grid(const CellGrid& g) {
+    grid_ = g;
+    start_.resize(g.count() + 1);
+  }
+  const CellGrid& grid() const { return grid_; }
+  // Builds order/start for positions x (n = x.n).
+  void build(Vec3CView x) {
+    const std::int64_t n = x.n;
+    if (keys_.size() != n) keys_.resize(n);
+    const auto k = keys_.view();
+    const CellGrid g = grid_;
+    for_each(Exec{}, n, QDEMSPH_LAMBDA(std::int64_t i) { k[i] = g.key_of(x[i]); });
+    const std::vector<std::int64_t> hk = keys_.to_host();
+    counting_sort_host(hk, grid_.count(), hstart_, horder_);
+    start_.assign(hstart_);
+    order_.assign(horder_);
+  }
+  View<const std::int64_t> start() const { return start_.cview(); }
+  View<const std::int64_t> order() const { return order_.cview(); }
+  const std::vector<std::int64_t>& host_order() const { return horder_; }
+  std::size_t bytes() const { return keys_.bytes() + start_.bytes() + order_.bytes(); }
+
+ private:
+  CellGrid grid_;
+  Buffer<std::int64_t> keys_{S}, start_{S}, order_{S};
+  std::vector<std::int64_t> hstart_, horder_;
+};
+
+}  // namespace qdemsph

@@ -1,0 +1,96 @@
+// WCSPH pair interaction between particles i and j (fluid-fluid or fluid-wall): momentum,
+// viscosity, continuity and density diffusion. Pure functions of two particles' values.
+//
+// Momentum (Monaghan 1992, symmetric form), force on i from j:
+//   F_ij = -m_i m_j (p_i/rho_i^2 + p_j/rho_j^2 + Pi_ij) grad_i W_ij  [+ laminar term]
+// Artificial viscosity (Monaghan 1992), only for approaching pairs (v_ij . r_ij < 0):
+//   Pi_ij = -alpha cbar h mu_ij / rhobar,  mu_ij = v_ij . r_ij / (r^2 + eta^2),  eta = 0.1 h
+// Laminar viscosity (Lo & Shao 2002, as in DualSPHysics), nu kinematic [m^2/s]:
+//   F_ij += m_i m_j 4 nu (r_ij . grad_i W_ij) / ((rho_i + rho_j)(r^2 + eta^2)) v_ij
+// Every factor is symmetric in (i, j) and r_ij, v_ij change sign exactly: F_ji = -F_ij bit for
+// bit, so momentum is conserved to summation round-off whatever order the pairs are visited.
+//
+// Continuity: drho_i/dt = sum_j m_j v_ij . grad_i W_ij
+// delta-SPH density diffusion (Molteni & Colagrossi 2009) with the hydrostatic correction of
+// Fourtakas et al. 2019 (diffuse only the dynamic part of the density difference):
+//   D_i = delta h c0 sum_j V_j 2 (rho_j - rho_i - drho^H_ji) (r_ji . grad_i W_ij) / (r^2 + eta^2)
+//   drho^H_ji = rho0 g . (x_j - x_i) / c0^2          (linearised Tait, hydrostatic)
+// Diffusion is applied between fluid particles only (wall densities come from Adami).
+#pragma once
+
+#include "core/hd.hpp"
+#include "core/vec.hpp"
+#include "physics/sph_eos.hpp"
+#include "physics/sph_kernel.hpp"
+
+namespace qdemsph {
+
+enum class SphViscosity : int { Artificial = 0, Laminar = 1 };
+
+struct SphParams {
+  WendlandC2 kernel;
+  TaitEos eos;
+  SphViscosity visc_type = SphViscosity::Artificial;
+  double alpha = 0.01;   // artificial viscosity coefficient
+  double nu = 0;         // laminar kinematic viscosity [m^2/s]
+  double delta = 0.1;    // density diffusion coefficient (0: off)
+  bool wall_viscosity = true;  // viscosity also between fluid and wall (no-slip-like)
+  Vec3 gravity{0, 0, 0};
+};
+
+struct PairState {
+  Vec3 x, v;
+  double rho, p, m;
+};
+
+// Force on i from j [N] (without gravity). `viscous`: include the viscosity term.
+QDEMSPH_HD Vec3 sph_pair_force(const SphParams& P, const PairState& a, const PairState& b,
+                               bool viscous) {
+  const Vec3 r = a.x - b.x;
+  const double r2 = norm2(r);
+  const double F = P.kernel.f(r2);
+  if (F == 0.0) return Vec3{};
+  const double eta2 = 0.01 * P.kernel.h * P.kernel.h;
+  double s = a.p / (a.rho * a.rho) + b.p / (b.rho * b.rho);
+  const Vec3 vij = a.v - b.v;
+  Vec3 lam{};
+  if (viscous) {
+    const double vr = dot(vij, r);
+    if (P.visc_type == SphViscosity::Artificial) {
+      if (vr < 0.0) {
+        const double cbar = 0.5 * (P.eos.sound_speed(a.rho) + P.eos.sound_speed(b.rho));
+        const double rhobar = 0.5 * (a.rho + b.rho);
+        const double mu = P.kernel.h * vr / (r2 + eta2);
+        s += -P.alpha * cbar * mu / rhobar;
+      }
+    } else {
+      const double k = 4.0 * P.nu * (r2 * F) / ((a.rho + b.rho) * (r2 + eta2));
+      lam = ((a.m * b.m) * k) * vij;
+    }
+  }
+  return ((-(a.m * b.m) * s) * F) * r + lam;
+}
+
+// Continuity contribution to drho_i/dt from j (m_j v_ij . grad W).
+QDEMSPH_HD double sph_continuity(const SphParams& P, const PairState& a, const PairState& b) {
+  const Vec3 r = a.x - b.x;
+  const double F = P.kernel.f(norm2(r));
+  return b.m * F * dot(a.v - b.v, r);
+}
+
+// delta-SPH diffusion contribution to drho_i/dt from fluid particle j.
+QDEMSPH_HD double sph_density_diffusion(const SphParams& P, const PairState& a,
+                                        const PairState& b) {
+  const Vec3 r = a.x - b.x;
+  const double r2 = norm2(r);
+  const double F = P.kernel.f(r2);
+  if (F == 0.0 || P.delta == 0.0) return 0.0;
+  const double c0 = P.eos.c0;
+  const double drho_h = P.eos.rho0 * dot(P.gravity, b.x - a.x) / (c0 * c0);
+  const double eta2 = 0.01 * P.kernel.h * P.kernel.h;
+  // (x_j - x_i) . grad_i W = -r^2 F >= 0
+  return P.delta * P.kernel.h * c0 * (b.m / b.rho) * 2.0 * (b.rho - a.rho - drho_h) *
+         (-r2 * F) / (r2 + eta2);
+}
+
+}  // namespace qdemsph

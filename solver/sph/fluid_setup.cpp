@@ -1,0 +1,145 @@
+#include "sph/fluid_setup.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace qdemsph {
+namespace {
+
+// Lattice counts along each axis for [lo, hi] with pitch dx (at least one).
+std::array<int, 3> lattice(Vec3 lo, Vec3 hi, double dx) {
+  std::array<int, 3> n{};
+  for (int a = 0; a < 3; ++a) n[a] = std::max(1, static_cast<int>(std::lround((hi[a] - lo[a]) / dx)));
+  return n;
+}
+
+// Vertical axis: the one gravity points along (y when there is no gravity).
+int up_axis(Vec3 g) {
+  int a = 1;
+  double best = 0;
+  for (int k = 0; k < 3; ++k)
+    if (std::fabs(g[k]) > best) best = std::fabs(g[k]), a = k;
+  return a;
+}
+
+}  // namespace
+
+FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
+  FluidSetup f;
+  const double dx = spec.spacing;
+  f.dx = dx;
+  const double gmag = norm(gravity);
+  const int up = up_axis(gravity);
+  const double up_sign = gravity[up] > 0 ? -1.0 : 1.0;  // +1: up is +axis
+  const double rho0 = spec.density;
+  const double mass = rho0 * dx * dx * dx;
+
+  for (const auto& b : spec.blocks)
+    f.height = std::max(f.height, b.max[up] - b.min[up]);
+  double c0 = 0;
+  if (spec.sound_speed) {
+    c0 = *spec.sound_speed;
+  } else {
+    if (gmag == 0)
+      throw InputError("fluid.sound_speed: 'auto' (10 sqrt(2 g H)) needs gravity; state it");
+    c0 = 10.0 * std::sqrt(2.0 * gmag * f.height);
+  }
+  SphParams& P = f.params;
+  P.kernel = WendlandC2::make(spec.smoothing * dx);
+  P.eos = TaitEos::make(rho0, c0);
+  P.visc_type = spec.viscosity_type == "laminar" ? SphViscosity::Laminar : SphViscosity::Artificial;
+  P.alpha = P.visc_type == SphViscosity::Artificial ? spec.viscosity : 0.0;
+  P.nu = P.visc_type == SphViscosity::Laminar ? spec.viscosity : 0.0;
+  P.delta = spec.delta;
+  P.wall_viscosity = spec.wall_viscosity;
+  P.gravity = gravity;
+
+  auto add = [&](Vec3 x, std::uint8_t type, double p) {
+    f.x.push_back(x);
+    f.v.push_back(Vec3{});
+    f.p.push_back(p);
+    // Fluid mass rho dx^3 with the initial (hydrostatic) density, so that m / rho = dx^3:
+    // the lattice is then in equilibrium with the pressure gradient.
+    const double rho = type == kSphFluid ? P.eos.density(p) : rho0;
+    f.rho.push_back(rho);
+    f.m.push_back(type == kSphFluid ? rho * dx * dx * dx : mass);
+    f.type.push_back(type);
+    f.gid.push_back(f.gid.size());
+  };
+
+  // Fluid blocks: lattice points at cell centres, hydrostatic pressure below each block's top.
+  for (std::size_t bi = 0; bi < spec.blocks.size(); ++bi) {
+    const auto& b = spec.blocks[bi];
+    const auto n = lattice(b.min, b.max, dx);
+    const double top = up_sign > 0 ? b.max[up] : -b.min[up];
+    const std::int64_t before = f.size();
+    for (int k = 0; k < n[2]; ++k)
+      for (int j = 0; j < n[1]; ++j)
+        for (int i = 0; i < n[0]; ++i) {
+          const Vec3 x{b.min.x + (i + 0.5) * dx, b.min.y + (j + 0.5) * dx, b.min.z + (k + 0.5) * dx};
+          const double depth = top - up_sign * x[up];
+          add(x, kSphFluid, spec.hydrostatic_init ? rho0 * gmag * depth : 0.0);
+        }
+    if (f.size() == before) throw InputError(fmt::format("fluid.blocks[{}]: no particle", bi));
+  }
+  f.n_fluid = f.size();
+
+  // Tanks: lattice points of the inner box grown by L layers (not on the open top) that lie
+  // outside the inner box.
+  for (const auto& t : spec.tanks) {
+    const auto n = lattice(t.min, t.max, dx);
+    const int L = t.thickness_layers;
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = -L;
+      hi[a] = n[a] + L;
+    }
+    if (up_sign > 0) hi[up] = n[up]; else lo[up] = 0;
+    for (int k = lo[2]; k < hi[2]; ++k)
+      for (int j = lo[1]; j < hi[1]; ++j)
+        for (int i = lo[0]; i < hi[0]; ++i) {
+          if (i >= 0 && i < n[0] && j >= 0 && j < n[1] && k >= 0 && k < n[2]) continue;
+          add({t.min.x + (i + 0.5) * dx, t.min.y + (j + 0.5) * dx, t.min.z + (k + 0.5) * dx},
+              kSphWall, 0.0);
+        }
+  }
+  for (const auto& w : spec.walls) {
+    const auto n = lattice(w.min, w.max, dx);
+    for (int k = 0; k < n[2]; ++k)
+      for (int j = 0; j < n[1]; ++j)
+        for (int i = 0; i < n[0]; ++i)
+          add({w.min.x + (i + 0.5) * dx, w.min.y + (j + 0.5) * dx, w.min.z + (k + 0.5) * dx},
+              kSphWall, 0.0);
+  }
+  f.n_wall = f.size() - f.n_fluid;
+
+  f.lo = f.x[0];
+  f.hi = f.x[0];
+  for (const Vec3& x : f.x)
+    for (int a = 0; a < 3; ++a) {
+      f.lo[a] = std::min(f.lo[a], x[a]);
+      f.hi[a] = std::max(f.hi[a], x[a]);
+    }
+  // Room for splashes above the highest particle; outside the box particles are clamped into
+  // the border cells (exact, only slower).
+  const double margin = 2.0 * P.kernel.support();
+  for (int a = 0; a < 3; ++a) {
+    f.lo[a] -= margin;
+    f.hi[a] += margin;
+  }
+  f.hi[up] += up_sign > 0 ? f.height : 0.0;
+  if (up_sign < 0) f.lo[up] -= f.height;
+  return f;
+}
+
+std::string describe_fluid(const FluidSetup& f) {
+  return fmt::format(
+      "SPH ({} fluid + {} wall particles, dx = {:.4g} m, h = {:.4g} m, c0 = {:.4g} m/s)",
+      f.n_fluid, f.n_wall, f.dx, f.params.kernel.h, f.params.eos.c0);
+}
+
+}  // namespace qdemsph

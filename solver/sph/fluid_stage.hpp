@@ -1,0 +1,58 @@
+// The fluid stage seen by the stepper (host orchestration; one virtual call per stage, never
+// inside a loop). Implemented by SphStage<Exec> (sph_stage.hpp) for each execution space.
+//
+// Time integration matches the solid's velocity Verlet at the shared dt:
+//   kick(dt/2): v += dt/2 a                      (fluid)
+//   drift(dt):  x += dt v                        (fluid)
+//   compute():  sort by cell; drho(x_{n+1}, v_{n+1/2}); rho += dt drho; EOS; wall pressure
+//               (Adami); pair forces -> a
+//   kick(dt/2)
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/vec.hpp"
+#include "physics/sph_timestep.hpp"
+#include "sph/fluid_setup.hpp"
+
+namespace qdemsph {
+
+struct FluidHost {
+  std::vector<Vec3> x, v;
+  std::vector<double> rho, p;
+  std::vector<std::uint8_t> type;
+  std::vector<std::uint64_t> gid;
+};
+
+struct FluidStats {
+  double kinetic = 0;    // sum 1/2 m v^2 over fluid [J]
+  Vec3 momentum{};       // sum m v over fluid [kg m/s]
+  double v_max = 0;      // max |v| [m/s]
+  double a_max = 0;      // max |a| [m/s^2]
+  double rho_dev = 0;    // max |rho / rho0 - 1| over fluid
+};
+
+class FluidStage {
+ public:
+  virtual ~FluidStage() = default;
+  virtual void kick(double h) = 0;
+  virtual void drift(double h) = 0;
+  virtual void compute() = 0;
+  virtual FluidStats stats() = 0;
+  virtual SphDtLimits dt_limits() = 0;
+  // -1 when every fluid position/velocity/density is finite, else a global particle id.
+  virtual std::int64_t find_non_finite() = 0;
+  virtual FluidHost download() = 0;
+  virtual std::int64_t size() const = 0;
+  virtual std::int64_t n_fluid() const = 0;
+  virtual std::size_t device_bytes() const = 0;
+  virtual const SphParams& params() const = 0;
+};
+
+// "cpu" or "cuda" (the latter where a CUDA build provides it; else InputError).
+std::unique_ptr<FluidStage> make_fluid_stage(const std::string& backend, const FluidSetup& setup);
+
+}  // namespace qdemsph
