@@ -1,0 +1,205 @@
+#include "parallel/comm_plan.hpp"
+
+#include <algorithm>
+#include <climits>
+#include <stdexcept>
+#include <string>
+
+namespace qdemsph {
+
+namespace {
+
+constexpr int kTag = 7301;
+
+void check_fields(std::span<const CommField> f, std::int64_t min_items, const char* what) {
+  for (std::size_t j = 0; j < f.size(); ++j)
+    if (f[j].n < min_items || (min_items > 0 && f[j].data == nullptr))
+      throw std::invalid_argument(std::string("comm plan: ") + what + " field " +
+                                  std::to_string(j) + " has " + std::to_string(f[j].n) +
+                                  " items, needs " + std::to_string(min_items));
+}
+
+int as_count(std::int64_t bytes) {
+  if (bytes > INT_MAX)
+    throw std::runtime_error("comm plan: message of " + std::to_string(bytes) +
+                             " bytes exceeds the MPI int count");
+  return static_cast<int>(bytes);
+}
+
+}  // namespace
+
+CommEngine::CommEngine(MPI_Comm comm, std::span<const std::int64_t> dest_offsets,
+                       std::span<const int> dest_ranks, std::int64_t recv_base)
+    : recv_base_(recv_base) {
+  MPI_Comm_dup(comm, &comm_);
+  MPI_Comm_rank(comm_, &rank_);
+  MPI_Comm_size(comm_, &size_);
+  n_items_ = static_cast<std::int64_t>(dest_offsets.size()) - 1;
+  const std::int64_t n_items = n_items_;
+  // Count sends per rank, then fill send slots by a counting sort (stable: item order).
+  std::vector<std::int64_t> count(size_, 0);
+  for (int r : dest_ranks) {
+    if (r < 0 || r >= size_)
+      throw std::invalid_argument("comm plan: destination rank " + std::to_string(r) +
+                                  " outside [0, " + std::to_string(size_) + ")");
+    ++count[r];
+  }
+  send_off_.assign(size_ + 1, 0);
+  for (int r = 0; r < size_; ++r) send_off_[r + 1] = send_off_[r] + count[r];
+  send_index_.resize(send_off_[size_]);
+  std::vector<std::int64_t> fill(send_off_.begin(), send_off_.end() - 1);
+  for (std::int64_t i = 0; i < n_items; ++i)
+    for (std::int64_t k = dest_offsets[i]; k < dest_offsets[i + 1]; ++k)
+      send_index_[fill[dest_ranks[k]]++] = i;
+  // Receive counts: one all-to-all of counts (O(ranks) memory; a sparse exchange is the
+  // next step at large rank counts).
+  std::vector<std::int64_t> rcount(size_, 0);
+  MPI_Alltoall(count.data(), 1, MPI_INT64_T, rcount.data(), 1, MPI_INT64_T, comm_);
+  recv_off_.assign(size_ + 1, 0);
+  for (int r = 0; r < size_; ++r) recv_off_[r + 1] = recv_off_[r] + rcount[r];
+  for (int r = 0; r < size_; ++r)
+    if (r != rank_ && (count[r] > 0 || rcount[r] > 0)) nbrs_.push_back(r);
+}
+
+CommEngine::~CommEngine() {
+  int finalized = 0;
+  MPI_Finalized(&finalized);
+  if (!finalized && comm_ != MPI_COMM_NULL) {
+    if (in_flight_) MPI_Waitall(static_cast<int>(reqs_.size()), reqs_.data(), MPI_STATUSES_IGNORE);
+    MPI_Comm_free(&comm_);
+  }
+}
+
+void CommEngine::begin(std::span<const CommField> src, Dir dir) {
+  if (in_flight_) throw std::logic_error("comm plan: begin() while an exchange is in flight");
+  const double t0 = MPI_Wtime();
+  stride_ = 0;
+  for (const CommField& f : src) stride_ += f.elem;
+  const bool fwd = dir == Dir::Forward;
+  // Forward sends along send_off_ and receives along recv_off_; reverse swaps them.
+  const std::vector<std::int64_t>& so = fwd ? send_off_ : recv_off_;
+  const std::vector<std::int64_t>& ro = fwd ? recv_off_ : send_off_;
+  check_fields(src, fwd ? n_items_ : recv_base_ + n_recv(), "source");
+  sendbuf_.resize(stride_ * so[size_]);
+  recvbuf_.resize(stride_ * ro[size_]);
+  // Pack, item-major. Bytes: stride per slot each way.
+  const std::int64_t ns = so[size_];
+  std::size_t off = 0;
+  for (const CommField& f : src) {
+    for (std::int64_t k = 0; k < ns; ++k) {
+      const std::int64_t item = fwd ? send_index_[k] : recv_base_ + k;
+      std::memcpy(&sendbuf_[k * stride_ + off], f.data + item * f.elem, f.elem);
+    }
+    off += f.elem;
+  }
+  // Post receives first, then sends; the self part is a copy.
+  reqs_.clear();
+  last_bytes_ = 0;
+  for (int r : nbrs_) {
+    const std::int64_t n = ro[r + 1] - ro[r];
+    if (n == 0) continue;
+    reqs_.emplace_back();
+    MPI_Irecv(recvbuf_.data() + ro[r] * stride_, as_count(n * stride_), MPI_BYTE, r, kTag, comm_,
+              &reqs_.back());
+  }
+  for (int r : nbrs_) {
+    const std::int64_t n = so[r + 1] - so[r];
+    if (n == 0) continue;
+    reqs_.emplace_back();
+    MPI_Isend(sendbuf_.data() + so[r] * stride_, as_count(n * stride_), MPI_BYTE, r, kTag, comm_,
+              &reqs_.back());
+    last_bytes_ += n * stride_;
+  }
+  const std::int64_t nself = so[rank_ + 1] - so[rank_];
+  if (nself > 0)
+    std::memcpy(recvbuf_.data() + ro[rank_] * stride_, sendbuf_.data() + so[rank_] * stride_,
+                nself * stride_);
+  total_bytes_ += last_bytes_;
+  seconds_.pack += MPI_Wtime() - t0;
+  dir_ = dir;
+  in_flight_ = true;
+}
+
+void CommEngine::finish(std::span<const CommField> dst, Dir dir) {
+  if (!in_flight_) throw std::logic_error("comm plan: finish() without begin()");
+  if (dir != dir_) throw std::logic_error("comm plan: finish() in another direction");
+  std::size_t stride = 0;
+  for (const CommField& f : dst) stride += f.elem;
+  const double t0 = MPI_Wtime();
+  MPI_Waitall(static_cast<int>(reqs_.size()), reqs_.data(), MPI_STATUSES_IGNORE);
+  in_flight_ = false;
+  const double t1 = MPI_Wtime();
+  seconds_.wait += t1 - t0;
+  if (stride != stride_)
+    throw std::invalid_argument("comm plan: finish() fields differ from begin()'s");
+  const bool fwd = dir == Dir::Forward;
+  check_fields(dst, fwd ? recv_base_ + n_recv() : n_items_, "destination");
+  std::size_t off = 0;
+  if (fwd) {
+    const std::int64_t nr = n_recv();
+    for (const CommField& f : dst) {
+      for (std::int64_t k = 0; k < nr; ++k)
+        std::memcpy(f.data + (recv_base_ + k) * f.elem, &recvbuf_[k * stride_ + off], f.elem);
+      off += f.elem;
+    }
+  } else {
+    // Sums in slot order (source rank, then sender order): deterministic.
+    const std::int64_t nr = n_send();
+    for (const CommField& f : dst) {
+      if (f.add == nullptr)
+        throw std::invalid_argument("comm plan: scatter-add on a non-arithmetic field");
+      for (std::int64_t k = 0; k < nr; ++k)
+        f.add(f.data + send_index_[k] * f.elem, &recvbuf_[k * stride_ + off]);
+      off += f.elem;
+    }
+  }
+  seconds_.unpack += MPI_Wtime() - t1;
+}
+
+MigratePlan::MigratePlan(MPI_Comm comm, std::span<const int> dest,
+                         std::span<const std::uint64_t> gid)
+    : n_old_(static_cast<std::int64_t>(dest.size())) {
+  if (gid.size() != dest.size())
+    throw std::invalid_argument("MigratePlan: " + std::to_string(dest.size()) +
+                                " destinations but " + std::to_string(gid.size()) + " ids");
+  std::vector<std::int64_t> offsets(dest.size() + 1);
+  for (std::size_t i = 0; i <= dest.size(); ++i) offsets[i] = static_cast<std::int64_t>(i);
+  engine_ = std::make_unique<CommEngine>(comm, offsets, dest, 0);
+  new_gids_.resize(engine_->n_recv());
+  const CommField s = comm_field(const_cast<std::uint64_t*>(gid.data()), n_old_);
+  const CommField d = comm_field(new_gids_);
+  begin({&s, 1});
+  finish({&d, 1});
+}
+
+HaloPlan::HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> offsets,
+                   std::span<const int> ranks, std::span<const std::uint64_t> gid)
+    : n_owned_(n_owned) {
+  if (static_cast<std::int64_t>(offsets.size()) != n_owned + 1 ||
+      static_cast<std::int64_t>(gid.size()) < n_owned)
+    throw std::invalid_argument("HaloPlan: offsets need n_owned + 1 entries and ids n_owned");
+  int me = 0;
+  MPI_Comm_rank(comm, &me);
+  // Drop this rank and repeats from each item's list.
+  std::vector<std::int64_t> off(n_owned + 1, 0);
+  std::vector<int> dst;
+  dst.reserve(ranks.size());
+  for (std::int64_t i = 0; i < n_owned; ++i) {
+    const std::size_t first = dst.size();
+    for (std::int64_t k = offsets[i]; k < offsets[i + 1]; ++k)
+      if (ranks[k] != me) dst.push_back(ranks[k]);
+    std::sort(dst.begin() + first, dst.end());
+    dst.erase(std::unique(dst.begin() + first, dst.end()), dst.end());
+    off[i + 1] = static_cast<std::int64_t>(dst.size());
+  }
+  engine_ = std::make_unique<CommEngine>(comm, off, dst, n_owned);
+  // Ghost ids: a gather of the id field into a scratch array of n_total items.
+  std::vector<std::uint64_t> ids(n_total(), 0);
+  std::copy(gid.begin(), gid.begin() + n_owned, ids.begin());
+  const CommField f = comm_field(ids);
+  gather_begin({&f, 1});
+  gather_finish({&f, 1});
+  ghost_gids_.assign(ids.begin() + n_owned, ids.end());
+}
+
+}  // namespace qdemsph

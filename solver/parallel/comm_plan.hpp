@@ -1,0 +1,200 @@
+// Communication as plans (STYLE.md item 6): MigratePlan moves items to new owner ranks,
+// HaloPlan gives neighbour ranks copies of the items in the halo band (gather) and adds the
+// copies' contributions back to the owners (scatter-add). Both are built once per
+// decomposition from (item -> destination ranks) lists and applied to any number of fields
+// every step; both run on one pack/send/unpack engine (CommEngine).
+//
+// Overlap: begin() packs and posts non-blocking sends and receives, finish() waits and
+// unpacks; interior work that does not touch the destination slots goes in between. One
+// exchange per plan may be in flight at a time; plans are independent of each other (each
+// has its own duplicated communicator), so a migration and a halo exchange may overlap.
+//
+// Identity: items carry 64-bit global ids; a plan exchanges them when it is built, so the
+// receiver knows which item each new slot holds (MigratePlan::new_gids,
+// HaloPlan::ghost_gids) and re-maps connectivity by id, never by a sender's local index.
+//
+// Order: received items are laid out by source rank, then by the sender's local order, so
+// layouts and the order of scatter-add sums are deterministic for a given decomposition.
+//
+// Fields are arrays of trivially copyable elements in host memory, one per SoA component
+// (a Vec3Buffer is three fields). The engine packs item-major (all fields of one item
+// together) so that each message is one contiguous block.
+//
+// This folder is the only place that includes <mpi.h>.
+#pragma once
+
+// The C API only (no deprecated C++ bindings).
+#ifndef OMPI_SKIP_MPICXX
+#define OMPI_SKIP_MPICXX 1
+#endif
+#ifndef MPICH_SKIP_MPICXX
+#define MPICH_SKIP_MPICXX 1
+#endif
+#include <mpi.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <span>
+#include <type_traits>
+#include <vector>
+
+#include "core/memory.hpp"
+
+namespace qdemsph {
+
+// A type-erased view of one field: n items of `elem` bytes each.
+struct CommField {
+  std::byte* data = nullptr;
+  std::int64_t n = 0;
+  std::size_t elem = 0;
+  void (*add)(std::byte* dst, const std::byte* src) = nullptr;  // dst += src; null: no sum
+};
+
+namespace detail {
+template <class T>
+void comm_add(std::byte* dst, const std::byte* src) {
+  T a, b;
+  std::memcpy(&a, dst, sizeof(T));
+  std::memcpy(&b, src, sizeof(T));
+  a += b;
+  std::memcpy(dst, &a, sizeof(T));
+}
+template <class T>
+constexpr auto comm_add_fn() {
+  if constexpr (std::is_arithmetic_v<T>)
+    return &comm_add<T>;
+  else
+    return static_cast<void (*)(std::byte*, const std::byte*)>(nullptr);
+}
+}  // namespace detail
+
+template <class T>
+CommField comm_field(T* p, std::int64_t n) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  return {reinterpret_cast<std::byte*>(p), n, sizeof(T), detail::comm_add_fn<T>()};
+}
+template <class T>
+CommField comm_field(std::vector<T>& v) {
+  return comm_field(v.data(), static_cast<std::int64_t>(v.size()));
+}
+template <class T>
+CommField comm_field(View<T> v) {
+  return comm_field(v.p, v.n);
+}
+
+// The pack/send/unpack engine. Send slots: the local items listed per destination rank
+// (send_index, grouped by rank); receive slots: recv_base + k for the k-th received item.
+// Forward: pack items at send_index, unpack into receive slots (assign).
+// Reverse: pack receive slots, unpack into send_index items (add): the transpose.
+class CommEngine {
+ public:
+  // dest_offsets (n_items + 1 entries) and dest_ranks: item i goes to ranks
+  // dest_ranks[dest_offsets[i] .. dest_offsets[i + 1]). Collective over comm.
+  CommEngine(MPI_Comm comm, std::span<const std::int64_t> dest_offsets,
+             std::span<const int> dest_ranks, std::int64_t recv_base);
+  ~CommEngine();
+  CommEngine(const CommEngine&) = delete;
+  CommEngine& operator=(const CommEngine&) = delete;
+
+  enum class Dir { Forward, Reverse };
+  void begin(std::span<const CommField> src, Dir dir);
+  void finish(std::span<const CommField> dst, Dir dir);
+  bool in_flight() const { return in_flight_; }
+
+  std::int64_t n_send() const { return static_cast<std::int64_t>(send_index_.size()); }
+  std::int64_t n_recv() const { return recv_off_.back(); }
+  std::int64_t recv_base() const { return recv_base_; }
+  int rank() const { return rank_; }
+  int size() const { return size_; }
+  // Ranks exchanged with (either direction), excluding this rank.
+  const std::vector<int>& neighbours() const { return nbrs_; }
+  // Bytes sent to other ranks by the last begin() and in total.
+  std::int64_t last_bytes() const { return last_bytes_; }
+  std::int64_t total_bytes() const { return total_bytes_; }
+  // Wall seconds spent, summed over all exchanges: packing and posting (begin), waiting
+  // for messages and unpacking (finish). Time between begin and finish is not counted.
+  struct Seconds {
+    double pack = 0, wait = 0, unpack = 0;
+  };
+  const Seconds& seconds() const { return seconds_; }
+
+ private:
+  MPI_Comm comm_ = MPI_COMM_NULL;
+  int rank_ = 0, size_ = 1;
+  std::int64_t n_items_ = 0;  // local items the send lists index
+  std::int64_t recv_base_ = 0;
+  std::vector<std::int64_t> send_off_, recv_off_;  // per rank, size + 1 entries
+  std::vector<std::int64_t> send_index_;
+  std::vector<int> nbrs_;
+  std::vector<std::byte> sendbuf_, recvbuf_;
+  std::vector<MPI_Request> reqs_;
+  std::size_t stride_ = 0;
+  bool in_flight_ = false;
+  Dir dir_ = Dir::Forward;
+  std::int64_t last_bytes_ = 0, total_bytes_ = 0;
+  Seconds seconds_;
+};
+
+// Moves every item to one destination rank (possibly its own). After finish the local
+// arrays hold n_new() items: those received, by source rank, then sender order.
+class MigratePlan {
+ public:
+  MigratePlan(MPI_Comm comm, std::span<const int> dest, std::span<const std::uint64_t> gid);
+  std::int64_t n_old() const { return n_old_; }
+  std::int64_t n_new() const { return engine_->n_recv(); }
+  const std::vector<std::uint64_t>& new_gids() const { return new_gids_; }
+
+  // src fields have n_old() items, dst fields n_new(); they must be different arrays.
+  void begin(std::span<const CommField> src) { engine_->begin(src, CommEngine::Dir::Forward); }
+  void finish(std::span<const CommField> dst) { engine_->finish(dst, CommEngine::Dir::Forward); }
+  // Blocking convenience: replaces v by its migrated contents.
+  template <class T>
+  void apply(std::vector<T>& v) {
+    std::vector<T> out(static_cast<std::size_t>(n_new()));
+    const CommField s = comm_field(v), d = comm_field(out);
+    begin({&s, 1});
+    finish({&d, 1});
+    v.swap(out);
+  }
+  const CommEngine& engine() const { return *engine_; }
+
+ private:
+  std::int64_t n_old_ = 0;
+  std::unique_ptr<CommEngine> engine_;
+  std::vector<std::uint64_t> new_gids_;
+};
+
+// Ghost copies of owned items on neighbour ranks. Local arrays hold the n_owned owned items
+// first, then n_ghost() ghosts (by source rank, then the owner's order). Item i's copies go
+// to the ranks in dest_ranks[dest_offsets[i] .. dest_offsets[i + 1]) (this rank and
+// repeats are ignored).
+class HaloPlan {
+ public:
+  HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> dest_offsets,
+           std::span<const int> dest_ranks, std::span<const std::uint64_t> gid);
+  std::int64_t n_owned() const { return n_owned_; }
+  std::int64_t n_ghost() const { return engine_->n_recv(); }
+  std::int64_t n_total() const { return n_owned_ + n_ghost(); }
+  const std::vector<std::uint64_t>& ghost_gids() const { return ghost_gids_; }
+
+  // Owned values -> ghost slots. Fields have n_total() items.
+  void gather_begin(std::span<const CommField> f) { engine_->begin(f, CommEngine::Dir::Forward); }
+  void gather_finish(std::span<const CommField> f) { engine_->finish(f, CommEngine::Dir::Forward); }
+  // Ghost values added into their owners' slots (arithmetic fields only).
+  void scatter_add_begin(std::span<const CommField> f) {
+    engine_->begin(f, CommEngine::Dir::Reverse);
+  }
+  void scatter_add_finish(std::span<const CommField> f) {
+    engine_->finish(f, CommEngine::Dir::Reverse);
+  }
+  const CommEngine& engine() const { return *engine_; }
+
+ private:
+  std::int64_t n_owned_ = 0;
+  std::unique_ptr<CommEngine> engine_;
+  std::vector<std::uint64_t> ghost_gids_;
+};
+
+}  // namespace qdemsph
