@@ -102,9 +102,7 @@ Model block_model(int n) {
   return m;
 }
 
-double layout_bytes_per_step(std::int64_t nt, std::int64_t nv) {
-  return 340.0 * nt + 344.0 * nv;
-}
+double layout_bytes_per_step(std::int64_t nt, std::int64_t nv) { return 340.0 * nt + 344.0 * nv; }
 
 // Host copy bandwidth (bytes read + written per second), all threads, best of reps.
 double host_copy_bandwidth(std::size_t bytes, int reps) {
@@ -144,7 +142,8 @@ Args parse(int argc, char** argv) {
       if (i + 1 >= argc) throw std::runtime_error("missing value after " + s);
       return argv[++i];
     };
-    if (s == "--backend") a.backend = next();
+    if (s == "--backend")
+      a.backend = next();
     else if (s == "--tets") {
       a.tets.clear();
       std::string v = next();
@@ -153,12 +152,17 @@ Args parse(int argc, char** argv) {
         a.tets.push_back(std::stod(v.substr(p, q - p)));
         p = q == std::string::npos ? v.size() : q + 1;
       }
-    } else if (s == "--largest") a.largest = true;
-    else if (s == "--largest-fill") a.largest_fill = std::stod(next());
-    else if (s == "--seconds") a.min_seconds = std::stod(next());
-    else if (s == "--json") a.json = next();
-    else throw std::runtime_error("unknown argument " + s +
-                                  " (use --backend cpu|cuda --tets N,N --largest --json FILE)");
+    } else if (s == "--largest")
+      a.largest = true;
+    else if (s == "--largest-fill")
+      a.largest_fill = std::stod(next());
+    else if (s == "--seconds")
+      a.min_seconds = std::stod(next());
+    else if (s == "--json")
+      a.json = next();
+    else
+      throw std::runtime_error("unknown argument " + s +
+                               " (use --backend cpu|cuda --tets N,N --largest --json FILE)");
   }
   return a;
 }
@@ -246,11 +250,12 @@ Json run_size(const Args& a, int n, double copy_bw, const std::string& label) {
   r["host_build_s"] = build_s;
   r["upload_s"] = upload_s;
   r["healthy"] = bad_tet < 0 && bad_v < 0;
-  fmt::print("{:<8} {:<5} {:>12} tets  {:>9.3e} tet-updates/s  step {:>9.3f} ms  "
-             "{:>5.0f} B/tet-step  {:>7.1f} GB/s = {:>5.1f} % of copy  {:>5.0f} B/tet state{}\n",
-             label, be->name(), nt, nt / step_s, 1e3 * step_s, bytes / nt, bw * 1e-9,
-             copy_bw > 0 ? 100 * bw / copy_bw : 0.0, static_cast<double>(be->device_bytes()) / nt,
-             bad_tet < 0 && bad_v < 0 ? "" : "  UNHEALTHY");
+  fmt::print(
+      "{:<8} {:<5} {:>12} tets  {:>9.3e} tet-updates/s  step {:>9.3f} ms  "
+      "{:>5.0f} B/tet-step  {:>7.1f} GB/s = {:>5.1f} % of copy  {:>5.0f} B/tet state{}\n",
+      label, be->name(), nt, nt / step_s, 1e3 * step_s, bytes / nt, bw * 1e-9,
+      copy_bw > 0 ? 100 * bw / copy_bw : 0.0, static_cast<double>(be->device_bytes()) / nt,
+      bad_tet < 0 && bad_v < 0 ? "" : "  UNHEALTHY");
   std::fflush(stdout);
   return r;
 }
@@ -278,10 +283,12 @@ int main(int argc, char** argv) {
     double copy_bw = 0;
     if (a.backend == "cuda") {
       copy_bw = gpu_copy_bandwidth(std::size_t{2} << 30, 10);
-      rec["copy_bandwidth_method"] = "cudaMemcpy device-to-device of 2 GiB, best of 10, read+write bytes";
+      rec["copy_bandwidth_method"] =
+          "cudaMemcpy device-to-device of 2 GiB, best of 10, read+write bytes";
     } else {
       copy_bw = host_copy_bandwidth(std::size_t{1} << 30, 10);
-      rec["copy_bandwidth_method"] = "OpenMP-parallel memcpy of 1 GiB, best of 10, read+write bytes";
+      rec["copy_bandwidth_method"] =
+          "OpenMP-parallel memcpy of 1 GiB, best of 10, read+write bytes";
     }
     rec["copy_bandwidth_Bps"] = copy_bw;
     fmt::print("backend {}; {}; copy bandwidth {:.1f} GB/s; {} host threads\n", a.backend,

@@ -31,11 +31,10 @@ struct CudaExec {
 // (InputError for an out-of-memory allocation: the problem is too large for the GPU).
 [[noreturn]] void cuda_fail(cudaError_t e, const char* what, const char* file, int line);
 
-#define QDEMSPH_CUDA_CHECK(call, what)                                         \
-  do {                                                                         \
-    const cudaError_t qdemsph_err_ = (call);                                   \
-    if (qdemsph_err_ != cudaSuccess)                                           \
-      ::qdemsph::cuda_fail(qdemsph_err_, what, __FILE__, __LINE__);            \
+#define QDEMSPH_CUDA_CHECK(call, what)                                                             \
+  do {                                                                                             \
+    const cudaError_t qdemsph_err_ = (call);                                                       \
+    if (qdemsph_err_ != cudaSuccess) ::qdemsph::cuda_fail(qdemsph_err_, what, __FILE__, __LINE__); \
   } while (0)
 
 // memory_cuda.cu: the grid cap for for_each (32 blocks per SM of the current device) and a
@@ -47,9 +46,15 @@ namespace cuda_detail {
 
 inline constexpr int kBlock = 256;
 inline constexpr int kMaxPartials = 1024;
+// Minimum resident blocks per SM asked of the register allocator for for_each kernels
+// (1: no cap; 4: at most 64 registers a thread).
+#ifndef QDEMSPH_CUDA_MIN_BLOCKS
+#define QDEMSPH_CUDA_MIN_BLOCKS 1
+#endif
 
 template <class F>
-__global__ void __launch_bounds__(kBlock) for_each_kernel(std::int64_t n, F f) {
+__global__ void __launch_bounds__(kBlock, QDEMSPH_CUDA_MIN_BLOCKS)
+    for_each_kernel(std::int64_t n, F f) {
   const std::int64_t stride = static_cast<std::int64_t>(blockDim.x) * gridDim.x;
   for (std::int64_t i = static_cast<std::int64_t>(blockIdx.x) * blockDim.x + threadIdx.x; i < n;
        i += stride)

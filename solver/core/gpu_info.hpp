@@ -10,9 +10,9 @@ namespace qdemsph {
 
 struct GpuInfo {
   bool available = false;
-  std::string why;             // when not available: the reason
-  std::string name;            // e.g. "NVIDIA H100 80GB HBM3"
-  int device = 0;              // CUDA device index in use
+  std::string why;   // when not available: the reason
+  std::string name;  // e.g. "NVIDIA H100 80GB HBM3"
+  int device = 0;    // CUDA device index in use
   int device_count = 0;
   int sm_count = 0;
   int cc_major = 0, cc_minor = 0;

@@ -47,8 +47,9 @@ bool cuda_available() {
 
 void* cuda_alloc(std::size_t bytes) {
   if (!cuda_available())
-    throw InputError("the CUDA backend needs a GPU, and this machine has none visible "
-                     "(check nvidia-smi and CUDA_VISIBLE_DEVICES)");
+    throw InputError(
+        "the CUDA backend needs a GPU, and this machine has none visible "
+        "(check nvidia-smi and CUDA_VISIBLE_DEVICES)");
   void* p = nullptr;
   const cudaError_t e = cudaMalloc(&p, bytes);
   if (e == cudaErrorMemoryAllocation) {

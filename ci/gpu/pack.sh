@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Builds the CUDA configuration here (a machine with nvcc, no GPU needed) and packs what a
+# GPU machine needs into PACK (default build-cuda-pack): bin/ (qdemsph, qdemsph_tests,
+# qdemsph_bench) and lib/ (shared libraries the GPU machines lack). Carry PACK to the GPU
+# machine and run ci/gpu_session.sh there; it sets LD_LIBRARY_PATH=PACK/lib.
+#
+# gmsh: the GPU machines have none, and libgmsh pulls in ~300 MB (OpenCASCADE, FLTK, ...).
+# lib/ gets a stub libgmsh.so.4.8 exporting the same gmsh:: functions, each throwing
+# "gmsh is not available"; only .msh import and shogi meshing need it, which the GPU session
+# does not use (box meshes only).
+set -euo pipefail
+BUILD=${BUILD:-build-cuda}
+PACK=${1:-build-cuda-pack}
+JOBS=${JOBS:-2}
+cd "$(dirname "$0")/../.."
+cmake -S . -B "$BUILD" -DQDEMSPH_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90 -DQDEMSPH_MPI=OFF \
+  -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$BUILD" -j "$JOBS" --target qdemsph qdemsph_tests qdemsph_bench
+rm -rf "$PACK"
+mkdir -p "$PACK/bin" "$PACK/lib"
+cp "$BUILD"/bin/qdemsph "$BUILD"/bin/qdemsph_tests "$BUILD"/bin/qdemsph_bench "$PACK/bin/"
+strip "$PACK"/bin/* || true
+
+# Stub gmsh: every exported gmsh:: C++ API function jumps to one function that throws.
+GMSH=$(ldd "$PACK/bin/qdemsph" | awk '/libgmsh/ {print $3}')
+if [ -n "$GMSH" ]; then
+  STUB=$(mktemp -d)
+  {
+    echo '#include <stdexcept>'
+    echo 'extern "C" [[noreturn]] void qdemsph_gmsh_missing() {'
+    echo '  throw std::runtime_error("gmsh is not available on this machine (stub libgmsh from ci/gpu/pack.sh)");'
+    echo '}'
+    echo '__asm__('
+    nm -D --defined-only "$GMSH" | awk '$2 == "T" && $3 ~ /^_ZN4gmsh/ {print $3}' | sort -u |
+      while read -r s; do
+        printf '  ".globl %s\\n.type %s,@function\\n%s: jmp qdemsph_gmsh_missing@PLT\\n"\n' "$s" "$s" "$s"
+      done
+    echo ');'
+  } >"$STUB/gmsh_stub.cpp"
+  g++ -shared -fPIC -O1 -Wl,-soname,"$(basename "$GMSH")" -o "$PACK/lib/$(basename "$GMSH")" "$STUB/gmsh_stub.cpp"
+  rm -rf "$STUB"
+fi
+# Libraries the GPU machines (Ubuntu 24.04 + CUDA 13) lack or have in another version.
+for b in "$PACK"/bin/*; do
+  ldd "$b" | awk '/=> \// {print $3}'
+done | sort -u | while read -r lib; do
+  case "$(basename "$lib")" in
+    libyaml-cpp.so.0.7*|libfmt.so.9*|libcudart.so.13*|libhdf5_serial.so.103*|libsz.so.2*|libaec.so.0*)
+      cp -L "$lib" "$PACK/lib/" ;;
+  esac
+done
+du -sh "$PACK"
+ls -la "$PACK/bin" "$PACK/lib"
