@@ -1,0 +1,60 @@
+#!/usr/bin/env bash
+# Regenerate every YADE reference under references/yade/results/ (called by `make references`).
+# Runs one YADE process at a time, single-threaded, headless (`yade -n -x`). About 40 min of
+# one core in all (more wall time on a loaded machine); the chains are most of it. YADE's
+# stderr (with the benign "do_intersect ... Unhandled switch case:0" warnings of yade
+# 2023.02a) goes to $LOGDIR.
+# Usage: references/yade/run_all.sh [--quick]   (--quick: sliding cases only)
+set -euo pipefail
+cd "$(dirname "$0")"
+OUT=results
+LOGDIR=${LOGDIR:-$(mktemp -d /tmp/yade_refs.XXXXXX)}
+PY=/usr/bin/python3
+mkdir -p "$OUT"
+command -v yade >/dev/null || { echo "yade not found: run ci/install-deps.sh" >&2; exit 2; }
+
+run() {  # run <log name> <script> <args...>
+  local name=$1; shift
+  local t0=$SECONDS
+  yade -n -x "$@" --out "$OUT" >"$LOGDIR/$name.log" 2>&1 \
+    || { echo "FAILED: $* (log $LOGDIR/$name.log)" >&2; exit 1; }
+  grep -E '^(SLIDING|SHOGI)' "$LOGDIR/$name.log" | cut -c1-240 || true
+  echo "  [$name: $((SECONDS - t0)) s]"
+}
+
+# Cube sliding (section 4): base, dt/2, 4x stiffness (with dt/2), and the live-check case.
+run sliding         sliding.py --mu 0.5 --v0 3.0 --dt 1e-5 --young 1e8
+run sliding_halfdt  sliding.py --mu 0.5 --v0 3.0 --dt 5e-6 --young 1e8 --tag _halfdt
+run sliding_stiff4  sliding.py --mu 0.5 --v0 3.0 --dt 5e-6 --young 4e8 --tag _stiff4
+run sliding_live    sliding.py --mu 0.5 --v0 1.0 --dt 1e-5 --young 1e8 --tail 0.05 --tag _live
+[[ "${1:-}" == "--quick" ]] && { $PY convergence.py "$OUT"; exit 0; }
+
+# Two pieces (point-face), mu 0.1 and 0.5: base, dt/2, 4x stiffness (with dt/2).
+for mu in 0.1 0.5; do
+  run two_mu$mu         shogi_two.py --mu $mu --dt 1e-5 --young 1e8
+  run two_mu${mu}_half  shogi_two.py --mu $mu --dt 5e-6 --young 1e8 --tag _halfdt
+  run two_mu${mu}_stiff shogi_two.py --mu $mu --dt 5e-6 --young 4e8 --tag _stiff4
+done
+
+# The same at a pitch of 30 mm (0.9375 x height), the spacing of
+# verification/cases/contact_shogi/scene_pair.yaml: base and 4x stiffness.
+for mu in 0.1 0.5; do
+  run two30_mu$mu       shogi_two.py --mu $mu --dt 1e-5 --young 1e8 --pitch 0.9375 --tag _pitch30mm
+  run two30_mu${mu}_st  shogi_two.py --mu $mu --dt 5e-6 --young 4e8 --pitch 0.9375 --tag _pitch30mm_stiff4
+done
+
+# One piece onto two (edge-edge), mu 0.1 and 0.5.
+for mu in 0.1 0.5; do
+  run one_onto_two_mu$mu shogi_one_onto_two.py --mu $mu --dt 1e-5 --young 1e8
+done
+
+# 40-piece chain (softer contact, young 1e7, to afford 95k steps x ~80 contacts), and two
+# 20-piece variants compared over pieces 5..18: 4x stiffness (its start needs a stronger push,
+# omega0 12 rad/s: with 5 rad/s the first piece only leans on the second at young 4e7), and a
+# coarser step (2 x dt, conservative for the step-size spread).
+run chain40        shogi_chain.py --n 40 --mu 0.5 --dt 2e-5 --young 1e7
+run chain20_stiff4 shogi_chain.py --n 20 --mu 0.5 --dt 2e-5 --young 4e7 --omega0 12 --tag _stiff4
+run chain20_dt2x   shogi_chain.py --n 20 --mu 0.5 --dt 4e-5 --young 1e7 --tag _dt2x
+
+$PY convergence.py "$OUT"
+echo "logs in $LOGDIR"
