@@ -4,9 +4,10 @@
 // Per step:
 //  1. broad phase: centroid c and radius r (max centroid-vertex distance) of every primitive
 //     (surface triangle, surface tet or tet: model/contact_model.hpp), a cell list of width
-//     L = max(2 r) + D_DEM (report eq. 9-10), candidate pairs (count, scan, fill) of
+//     L = max(2 r) + D_DEM + skin (report eq. 9-10), candidate pairs (count, scan, fill) of
 //     primitives of different bodies (or of one body with self-contact) whose spheres grown
-//     by D_DEM overlap, never two fixed bodies;
+//     by D_DEM + skin overlap, never two fixed bodies; the list is reused until a primitive
+//     has moved by skin / 2 (Verlet skin, skin = D_DEM + max r / 4);
 //  2. narrow phase over the triangles each primitive owns: point-face and edge-edge
 //     (physics/contact_geometry.hpp) for the features each triangle owns, plus surface
 //     vertices against analytic walls; records counted, scanned, filled, sorted by key;
@@ -44,7 +45,8 @@ namespace qdemsph {
 struct ContactTopology {
   View<const std::int32_t> tri_v;  // tri_v[k * ntri + s]
   std::int64_t ntri = 0;
-  View<const std::int32_t> tri_body, edge_v;  // edge_v[k * ne + e]
+  View<const std::int32_t> tri_body, edge_v, edge_tri;  // edge_v/edge_tri[k * ne + e]
+  Vec3CView tri_n;  // unit outward normal of each surface triangle, this step
   std::int64_t ne = 0;
   View<const std::int64_t> own_v_off, own_e_off, prim_tri_off;
   View<const std::int32_t> own_v, own_e, prim_tri;
@@ -53,6 +55,10 @@ struct ContactTopology {
   bool self_contact = false;
 
   QDEMSPH_HD int tri_vertex(std::int64_t s, int k) const { return tri_v[k * ntri + s]; }
+  QDEMSPH_HD Vec3 edge_normal(int e) const {
+    const int t0 = edge_tri[e], t1 = edge_tri[ne + e];
+    return (t0 >= 0 ? tri_n[t0] : Vec3{}) + (t1 >= 0 ? tri_n[t1] : Vec3{});
+  }
   QDEMSPH_HD bool tri_has(std::int64_t s, int v) const {
     return tri_vertex(s, 0) == v || tri_vertex(s, 1) == v || tri_vertex(s, 2) == v;
   }
@@ -101,7 +107,6 @@ struct ContactTopology {
       }
     }
     // Edge-edge.
-    const Vec3 na = cross(pa[1] - pa[0], pa[2] - pa[0]), nb = cross(pb[1] - pb[0], pb[2] - pb[0]);
     for (std::int64_t qa = own_e_off[a]; qa < own_e_off[a + 1]; ++qa)
       for (std::int64_t qb = own_e_off[b]; qb < own_e_off[b + 1]; ++qb) {
         const int ea = own_e[qa], eb = own_e[qb];
@@ -109,7 +114,7 @@ struct ContactTopology {
         const int e1 = swap ? eb : ea, e2 = swap ? ea : eb;
         const int a0 = edge_v[e1], a1 = edge_v[ne + e1], b0 = edge_v[e2], b1 = edge_v[ne + e2];
         if (same && (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1)) continue;
-        const EdgeEdge ee = edge_edge(x[a0], x[a1], x[b0], x[b1], swap ? nb : na, swap ? na : nb);
+        const EdgeEdge ee = edge_edge(x[a0], x[a1], x[b0], x[b1], edge_normal(e1), edge_normal(e2));
         // Edges have no face region to confirm a penetration: two skew edges merely passing
         // behind each other would read as a deep overlap. Accept |d| < D_DEM only.
         if (!ee.valid || !(ee.d < d_dem) || !(ee.d > -d_dem)) continue;
@@ -166,16 +171,22 @@ class ContactStage {
     self_ = c.self_contact;
     kn_factor_ = c.kn_factor;
     kt_ratio_ = c.kt_ratio;
+    skin_setting_ = c.skin;
     nm_ = c.n_mat;
-    std::vector<std::int32_t> tv(3 * ntri_), ev(2 * ne_), pv(4 * np_);
+    std::vector<std::int32_t> tv(3 * ntri_), ev(2 * ne_), et(2 * ne_), pv(4 * np_);
     for (std::int64_t s = 0; s < ntri_; ++s)
       for (int k = 0; k < 3; ++k) tv[k * ntri_ + s] = c.tri_v[s][k];
     for (std::int64_t e = 0; e < ne_; ++e)
-      for (int k = 0; k < 2; ++k) ev[k * ne_ + e] = c.edges[e][k];
+      for (int k = 0; k < 2; ++k) {
+        ev[k * ne_ + e] = c.edges[e][k];
+        et[k * ne_ + e] = c.edge_tri[e][k];
+      }
     for (std::int64_t p = 0; p < np_; ++p)
       for (int k = 0; k < 4; ++k) pv[k * np_ + p] = c.prim_v[p][k];
     tri_v_.assign(tv);
     edge_v_.assign(ev);
+    edge_tri_.assign(et);
+    tri_n_.resize(ntri_);
     prim_v_.assign(pv);
     tri_body_.assign(c.tri_body);
     prim_body_.assign(c.prim_body);
@@ -208,6 +219,10 @@ class ContactStage {
     inv_mass_.assign(m.inv_mass);
     pc_.resize(np_);
     pr_.resize(np_);
+    pc_ref_.resize(np_);
+    pr_ref_.resize(np_);
+    built_ = false;
+    rebuilds_ = 0;
     cnt_.resize(np_ + nwv_ + 1);
     vcnt_.resize(nv_ + 1);
     vcur_.resize(nv_);
@@ -216,19 +231,23 @@ class ContactStage {
 
   // f[i] += contact force on vertex i, for free vertices i < n_free_vertices. dt > 0 advances
   // the tangential springs (dynamics); dt = 0 leaves them (relaxation, the first evaluation).
+  // Timers accumulate for dynamic steps only (dt > 0: inside the stepper's "elements" phase),
+  // so run_scene can report "elements" without contact.
   void add_forces(Vec3CView x, Vec3CView v, Vec3View f, double dt) {
+    PhaseTimers scratch;
+    PhaseTimers& tm = dt > 0 ? timers_ : scratch;
     std::int64_t npairs = 0;
     {
-      auto scope = timers_.scope("contact.broad");
+      auto scope = tm.scope("contact.broad");
       npairs = broad_phase(x);
     }
     std::int64_t nc = 0;
     {
-      auto scope = timers_.scope("contact.narrow");
+      auto scope = tm.scope("contact.narrow");
       nc = narrow_phase(x);
     }
     {
-      auto scope = timers_.scope("contact.force");
+      auto scope = tm.scope("contact.force");
       forces(x, v, f, dt, nc);
     }
     stats_.pairs = npairs;
@@ -240,8 +259,9 @@ class ContactStage {
   const ContactStepStats& stats() const { return stats_; }
   double max_overlap_ever() const { return max_overlap_ever_; }
   std::int64_t steps() const { return steps_; }
+  std::int64_t pair_rebuilds() const { return rebuilds_; }
   std::size_t bytes() const {
-    return tri_v_.bytes() + edge_v_.bytes() + prim_v_.bytes() + tri_body_.bytes() + prim_body_.bytes() +
+    return tri_v_.bytes() + edge_v_.bytes() + edge_tri_.bytes() + tri_n_.bytes() + prim_v_.bytes() + tri_body_.bytes() + prim_body_.bytes() +
            own_v_off_.bytes() + own_e_off_.bytes() + own_v_.bytes() + own_e_.bytes() +
            prim_tri_off_.bytes() + prim_tri_.bytes() + pc_.bytes() + pr_.bytes() + cnt_.bytes() +
            rec_.bytes() + ent_f_.bytes() + ent_v_.bytes() + vcnt_.bytes() + vcur_.bytes() +
@@ -255,6 +275,8 @@ class ContactStage {
     t.ntri = ntri_;
     t.tri_body = tri_body_.cview();
     t.edge_v = edge_v_.cview();
+    t.edge_tri = edge_tri_.cview();
+    t.tri_n = tri_n_.cview();
     t.ne = ne_;
     t.own_v_off = own_v_off_.cview();
     t.own_e_off = own_e_off_.cview();
@@ -316,8 +338,22 @@ class ContactStage {
       lo[a] = -reduce_max(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return -ca[p]; }, -1e300);
     }
     const double rmax = reduce_max(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return rr[p]; }, 0.0);
-    // Report eq. 9-10: L_cell >= D_max + D_DEM with D_max = 2 max r.
-    const double L = (2 * rmax + d_dem_) * (1 + 1e-9) + 1e-300;
+    // Verlet skin: the pair list built with gap D_DEM + skin stays a superset of the pairs
+    // within D_DEM until some primitive's centroid has moved, plus its radius changed, by
+    // skin / 2. Checked every step (one pass); the list is rebuilt only then.
+    if (built_) {
+      const auto c0 = pc_ref_.cview();
+      const auto r0 = pr_ref_.cview();
+      const double moved = reduce_max(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) {
+        const double dr = rr[p] - r0[p];
+        return norm(cc[p] - c0[p]) + (dr > 0 ? dr : -dr);
+      }, 0.0);
+      if (skin_ > 0 && moved <= 0.5 * skin_) return pairs_.size();
+    }
+    skin_ = skin_setting_ >= 0 ? skin_setting_ : d_dem_ + 0.25 * rmax;
+    const double gap = d_dem_ + skin_;
+    // Report eq. 9-10: L_cell >= D_max + D_DEM with D_max = 2 max r (+ the skin).
+    const double L = (2 * rmax + gap) * (1 + 1e-9) + 1e-300;
     cells_.set_grid(cover_capped(lo, hi, L, 4 * np + 64));
     cells_.build(cc);
     const auto pb = prim_body_.cview();
@@ -326,7 +362,17 @@ class ContactStage {
     const auto pvv = pv;
     // Only primitives of free bodies start a pair (they come first): a fixed-fixed pair is
     // never needed, and a free-fixed pair (i < npf <= j) is found from its free side.
-    return pairs_.build(cells_, cc, rr, d_dem_, npf_, QDEMSPH_LAMBDA(std::int64_t i, std::int64_t j)->bool {
+    {
+      const auto c0 = pc_ref_.view();
+      const auto r0 = pr_ref_.view();
+      for_each(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) {
+        c0.set(p, cc[p]);
+        r0[p] = rr[p];
+      });
+    }
+    built_ = true;
+    ++rebuilds_;
+    return pairs_.build(cells_, cc, rr, gap, npf_, QDEMSPH_LAMBDA(std::int64_t i, std::int64_t j)->bool {
       const int bi = pb[i], bj = pb[j];
       if (fixed[bi] && fixed[bj]) return false;
       if (bi != bj) return true;
@@ -344,6 +390,17 @@ class ContactStage {
 
   // Records of all contacts, sorted by key, duplicates of one touch deactivated.
   std::int64_t narrow_phase(Vec3CView x) {
+    {
+      const std::int64_t ntri = ntri_;
+      const auto tv = tri_v_.cview();
+      const auto tn = tri_n_.view();
+      for_each(Exec{}, ntri, QDEMSPH_LAMBDA(std::int64_t s) {
+        const Vec3 p0 = x[tv[s]], p1 = x[tv[ntri + s]], p2 = x[tv[2 * ntri + s]];
+        const Vec3 m = cross(p1 - p0, p2 - p0);
+        const double l = norm(m);
+        tn.set(s, l > 0 ? m / l : Vec3{});
+      });
+    }
     const ContactTopology topo = topology();
     const std::int64_t np = npf_, nwv = nwv_, nw = nw_;  // pairs start at free primitives
     const auto ps = pairs_.start();
@@ -529,8 +586,9 @@ class ContactStage {
     const auto vent = vent_.view();
     const auto evc = ent_v_.cview();
     const auto efc = ent_f_.cview();
-    for_each(Exec{}, nv + 1, QDEMSPH_LAMBDA(std::int64_t i) { vcnt[i] = 0; });
-    for_each(Exec{}, nv, QDEMSPH_LAMBDA(std::int64_t i) { vcur[i] = 0; });
+    (void)nv;
+    vcnt_.zero();  // memset: no parallel region for a loop without work
+    vcur_.zero();
     for_each(Exec{}, ne4, QDEMSPH_LAMBDA(std::int64_t e) {
       if (evc[e] >= 0) atomic_inc(&vcnt[evc[e]]);
     });
@@ -571,6 +629,8 @@ class ContactStage {
   double d_dem_ = 0, kn_factor_ = 0.5, kt_ratio_ = 2.0 / 7.0;
   bool self_ = false;
   int nm_ = 0;
+  Vec3Buffer tri_n_{S};
+  Buffer<std::int32_t> edge_tri_{S};
   Buffer<std::int32_t> tri_v_{S}, edge_v_{S}, prim_v_{S}, tri_body_{S}, prim_body_{S}, own_v_{S},
       own_e_{S}, prim_tri_{S}, wall_v_{S}, body_fixed_{S}, body_mat_{S}, vertex_body_{S};
   Buffer<std::int64_t> own_v_off_{S}, own_e_off_{S}, prim_tri_off_{S}, cnt_{S};
@@ -585,6 +645,11 @@ class ContactStage {
   Buffer<std::uint64_t> pk1_{S}, pk2_{S}, nk1_{S}, nk2_{S};
   Buffer<int> pact_{S}, nact_{S};
   Vec3Buffer pxi_{S}, nxi_{S};
+  Vec3Buffer pc_ref_{S};
+  Buffer<double> pr_ref_{S};
+  bool built_ = false;
+  double skin_ = 0, skin_setting_ = -1;
+  std::int64_t rebuilds_ = 0;
   ContactStepStats stats_;
   double max_overlap_ever_ = 0;
   std::int64_t steps_ = 0;

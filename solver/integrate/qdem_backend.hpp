@@ -4,8 +4,10 @@
 //
 // Data layout (SoA, n = count): vertex fields are Vec3 buffers (x, y, z arrays); tet
 // connectivity tv[k * nt + t]; dX^-1 entries dxi[(3 r + c) * nt + t]; per-tet corner forces
-// tf[k * nt + t]. Forces reach vertices by a gather over a vertex->corner CSR list rather
-// than atomics, so the sum order is fixed: results are deterministic on every backend.
+// tf[k * nt + t], stored as whole Vec3s (AoS): the gather reads one 24-byte record per
+// corner instead of three scattered doubles. Forces reach vertices by a gather over a
+// vertex->corner CSR list rather than atomics, so the sum order is fixed: results are
+// deterministic on every backend.
 #pragma once
 
 #include <algorithm>
@@ -43,6 +45,8 @@ class QdemBackend final : public Backend {
     mass_.assign(m.mass);
     inv_mass_.assign(m.inv_mass);
     relax_inv_mass_.assign(m.relax_inv_mass);
+    x0_.resize(nv_);  // relaxation start state (mark_relax_start)
+    f0_.resize(nv_);
     diss_v_.resize(nv_);
     std::vector<std::int32_t> tv(4 * nt_);
     std::vector<double> dxi(9 * nt_);
@@ -107,7 +111,7 @@ class QdemBackend final : public Backend {
         for (int c = 0; c < 3; ++c) Xi.m[r][c] = dxi[(3 * r + c) * nt + t];
       const ElementForces e = tet_forces(mats[tmat[t]], xs, vs, Xi, vol0[t]);
       if (!(det(e.F) > 0)) raise_flag(flag, t);
-      for (int k = 0; k < 4; ++k) tf.set(k * nt + t, e.f[k]);
+      for (int k = 0; k < 4; ++k) tf[k * nt + t] = e.f[k];
       if (dt_diss > 0) diss_t[t] += dt_diss * vol0[t] * e.stress.dissipation;
     });
     const auto off = csr_off_.cview();
@@ -131,6 +135,9 @@ class QdemBackend final : public Backend {
       if (contact_) contact_->add_forces(x_.cview(), v_.cview(), f_.view(), dt_diss);
   }
 
+  // The contact stage (null when the model needs none), for tests and diagnostics.
+  const ContactStage<Exec>* contact_stage() const { return contact_.get(); }
+
   std::map<std::string, double> stage_seconds() const override {
     if (!contact_) return {};
     return contact_->seconds();
@@ -142,7 +149,8 @@ class QdemBackend final : public Backend {
             {"contacts", static_cast<double>(c.contacts)},
             {"active", static_cast<double>(c.active)},
             {"max_overlap", c.max_overlap},
-            {"max_overlap_ever", contact_->max_overlap_ever()}};
+            {"max_overlap_ever", contact_->max_overlap_ever()},
+            {"pair_rebuilds", static_cast<double>(contact_->pair_rebuilds())}};
   }
 
   void kick(double h) override {
@@ -184,8 +192,6 @@ class QdemBackend final : public Backend {
   }
 
   void mark_relax_start() override {
-    x0_.resize(nv_);
-    f0_.resize(nv_);
     const auto x = x_.cview(), f = f_.cview();
     const auto x0 = x0_.view(), f0 = f0_.view();
     for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
@@ -321,7 +327,8 @@ class QdemBackend final : public Backend {
   std::int64_t nv_ = 0, nt_ = 0, nfv_ = 0, nft_ = 0;
   Vec3 gravity_;
   bool preload_ = false;
-  Vec3Buffer X_{S}, x_{S}, v_{S}, f_{S}, fext_{S}, fpre_{S}, tf_{S}, x0_{S}, f0_{S};
+  Vec3Buffer X_{S}, x_{S}, v_{S}, f_{S}, fext_{S}, fpre_{S}, x0_{S}, f0_{S};
+  Buffer<Vec3> tf_{S};
   Buffer<double> mass_{S}, inv_mass_{S}, relax_inv_mass_{S}, diss_v_{S}, dxi_{S}, vol0_{S}, diss_t_{S};
   Buffer<std::int32_t> tv_{S}, tmat_{S};
   Buffer<Material> mats_{S};

@@ -145,6 +145,7 @@ struct ContactSpec {
   bool self_contact = false;
   std::string broad_phase = "polygons";  // polygons | surface_tets | all_tets (report Fig. 7)
   double stiffness_factor = 0.5;         // default k_n = factor * E_pair * h_pair
+  std::optional<double> skin;            // pair-list Verlet skin [m]; absent: auto; 0: rebuild every step
   std::vector<ContactPairSpec> pairs;
 };
 

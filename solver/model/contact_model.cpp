@@ -35,6 +35,7 @@ void build_contact_model(const Scene& scene, Model& model,
   c.enabled = any_free && (nb > 1 || !scene.walls.empty() || scene.contact.self_contact);
   c.self_contact = scene.contact.self_contact;
   c.kn_factor = scene.contact.stiffness_factor;
+  c.skin = scene.contact.skin.value_or(-1.0);
   c.mode = scene.contact.broad_phase == "all_tets"       ? BroadPhase::AllTets
            : scene.contact.broad_phase == "surface_tets" ? BroadPhase::SurfaceTets
                                                          : BroadPhase::Polygons;
@@ -78,6 +79,7 @@ void build_contact_model(const Scene& scene, Model& model,
   std::vector<std::int32_t> v_owner(nv, -1), e_owner(c.edges.size(), -1);
   c.own_v_off.assign(ntri + 1, 0);
   c.own_e_off.assign(ntri + 1, 0);
+  c.edge_tri.assign(c.edges.size(), {-1, -1});
   for (std::int64_t s = 0; s < ntri; ++s) {
     for (int q = 0; q < 3; ++q) {
       const std::int32_t a = c.tri_v[s][q], b = c.tri_v[s][(q + 1) % 3];
@@ -88,6 +90,8 @@ void build_contact_model(const Scene& scene, Model& model,
       const std::array<std::int32_t, 2> e{std::min(a, b), std::max(a, b)};
       const auto it = std::lower_bound(c.edges.begin(), c.edges.end(), e);
       const auto ei = static_cast<std::int32_t>(it - c.edges.begin());
+      auto& et = c.edge_tri[ei];
+      (et[0] < 0 ? et[0] : et[1]) = static_cast<std::int32_t>(s);
       if (e_owner[ei] < 0) {
         e_owner[ei] = static_cast<std::int32_t>(s);
         c.own_e.push_back(ei);

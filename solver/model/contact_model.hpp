@@ -39,11 +39,13 @@ struct ContactModel {
   bool self_contact = false;
   double kn_factor = 0.5;    // default k_n = kn_factor * E_pair * h_pair
   double kt_ratio = 2.0 / 7.0;
+  double skin = -1;          // pair-list Verlet skin [m]; < 0: auto (D_DEM + max r / 4)
 
   // Surface triangles (global vertex ids), owning body; unique edges; ownership CSR.
   std::vector<std::array<std::int32_t, 3>> tri_v;
   std::vector<std::int32_t> tri_body;
   std::vector<std::array<std::int32_t, 2>> edges;  // (a, b), a < b, sorted
+  std::vector<std::array<std::int32_t, 2>> edge_tri;  // the edge's two triangles (-1: none)
   std::vector<std::int64_t> own_v_off, own_e_off;  // size n_tri + 1
   std::vector<std::int32_t> own_v, own_e;          // vertex ids / edge ids
 

@@ -13,8 +13,10 @@
 // whose determinant is -|d1 x d2|^2. Nearly parallel edges (sin angle < kParallelSin) and
 // closest points at an endpoint (vertex-edge, vertex-vertex) are *not* edge-edge contacts:
 // point-face covers them, so one touch is never counted twice and nothing divides by ~0.
-// The normal is d1 x d2, oriented from body 2 to body 1 by the outward normals of the faces
-// owning the edges (robust when the edges are coplanar and the distance is zero).
+// The normal is d1 x d2, oriented from body 2 to body 1 by the edges' outward normals (the
+// sums of their two faces' unit normals): robust when the edges are coplanar, the distance is
+// zero or the edges have crossed. Only when those normals cannot decide (|n . (o2 - o1)| <
+// 1e-3) does the direction from Q to P decide.
 // ~60 flops (point-face), ~80 flops (edge-edge); no branches that can produce NaN.
 #pragma once
 
@@ -23,7 +25,7 @@
 namespace qdemsph {
 
 inline constexpr double kParallelSin = 1e-3;  // edge pairs closer to parallel are skipped
-inline constexpr double kEdgeInterior = 1e-9;  // closest point must be this far from an end
+inline constexpr double kEdgeInterior = 1e-6;  // closest point must be this far from an end
 
 struct PointFace {
   bool inside = false;  // projection falls inside the (non-degenerate) triangle
@@ -62,7 +64,7 @@ struct EdgeEdge {
   Vec3 p, q;           // closest points on edge 1 and edge 2
 };
 
-// out1, out2: outward normals (any length) of faces owning edge 1 and edge 2; they orient n.
+// out1, out2: outward normals of edge 1 and edge 2 (sum of the adjacent faces' unit normals).
 QDEMSPH_HD EdgeEdge edge_edge(Vec3 a0, Vec3 a1, Vec3 b0, Vec3 b1, Vec3 out1, Vec3 out2) {
   EdgeEdge r;
   const Vec3 d1 = a1 - a0, d2 = b1 - b0, w = a0 - b0;
@@ -81,7 +83,7 @@ QDEMSPH_HD EdgeEdge edge_edge(Vec3 a0, Vec3 a1, Vec3 b0, Vec3 b1, Vec3 out1, Vec
   r.q = b0 + t * d2;
   Vec3 n = m / sqrt(mm2);
   double sg = dot(n, out2 - out1);
-  if (sg == 0) sg = dot(n, r.p - r.q);
+  if (fabs(sg) < 1e-3) sg = dot(n, r.p - r.q);
   if (sg < 0) n = -n;
   r.n = n;
   r.d = dot(r.p - r.q, n);

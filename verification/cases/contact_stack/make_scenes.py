@@ -29,7 +29,7 @@ def scene(name, n, cells, end_time, note):
 
 scene("contact_stack_scene_27", 3, 8, 1.0,
       "27 cubes of 6,144 tets (the report's Fig. 7 stack) settling on a plane under gravity.")
-scene("contact_stack_scene_8", 2, 4, 0.5,
+scene("contact_stack_scene_8", 2, 4, 0.4,
       "8 cubes of 768 tets, 2x2x2, settling on a plane under gravity (quick tier).")
 for f in ["27", "8"]:
     (HERE / f"{f}.yaml").rename(HERE / f"scene_{f}.yaml")
