@@ -4,12 +4,14 @@
 #   make test       unit tests + the quick tier of the verification suite
 #   make verify     the verification suite (FULL=1: the long tier)
 #   make references regenerate the stored FEniCSx and YADE reference results
+#   make sanitize   unit tests under ASan+UBSan (a subset; FILTER='*' for all)
+#   make fuzz       libFuzzer targets for the scene parser and mesh reader (FUZZ_SECONDS each)
 BUILD ?= build
 JOBS ?= $(shell nproc)
 PY := /usr/bin/python3
 FULL ?= 0
 
-.PHONY: all deps build run test unit verify references clean
+.PHONY: all deps build run test unit verify references sanitize fuzz clean
 all: build
 
 deps:
@@ -35,6 +37,12 @@ test: unit verify
 references: build
 	@bash references/fenicsx/make_references.sh $(BUILD)/bin/qdemsph
 	@bash references/yade/run_all.sh
+
+sanitize: deps
+	@bash ci/sanitize.sh $(FILTER)
+
+fuzz: deps
+	@bash ci/fuzz.sh $(or $(FUZZ_SECONDS),60)
 
 clean:
 	rm -rf $(BUILD)
