@@ -4,10 +4,16 @@
 
 namespace qdemsph {
 
+#ifdef QDEMSPH_HAVE_CUDA
+std::unique_ptr<FluidStage> make_fluid_stage_cuda(const FluidSetup& setup);  // fluid_cuda.cu
+#endif
+
 std::unique_ptr<FluidStage> make_fluid_stage(const std::string& backend, const FluidSetup& setup) {
   if (backend == "cpu") return std::make_unique<SphStage<HostExec>>(setup);
-  throw InputError("the SPH fluid stage has no '" + backend +
-                   "' backend yet (sph/sph_stage.hpp needs a CudaExec instantiation)");
+#ifdef QDEMSPH_HAVE_CUDA
+  if (backend == "cuda") return make_fluid_stage_cuda(setup);
+#endif
+  throw InputError("the SPH fluid stage has no '" + backend + "' backend in this build");
 }
 
 }  // namespace qdemsph

@@ -1,7 +1,8 @@
 // WCSPH fluid stage written once over an execution space (HostExec, CudaExec).
 //
-// Data (SoA, n = fluid + wall particles, kept sorted by cell: re-sorted at every compute() by a
-// counting sort, so the 27-cell neighbour ranges are contiguous and memory access is local):
+// Data (SoA, n = fluid + wall particles, kept sorted by (cell, type): re-sorted at every
+// compute() by a counting sort, so neighbour ranges are contiguous, memory access is local and
+// the wall-pressure pass visits fluid particles only):
 //   x, v, a (Vec3 buffers), rho, p, drho, m (double), type (uint8: fluid / wall), gid (uint64).
 // Wall particles are fixed; their p and rho come from the fluid by Adami extrapolation.
 //
@@ -21,12 +22,36 @@
 
 namespace qdemsph {
 
+// Neighbour ranges over arrays sorted by (cell, type): the particles of cell c are
+// [start[2c], start[2c+2]), its fluid particles [start[2c], start[2c+1]). Calls f(j) for every
+// particle (fluid_only: every fluid particle) in the 27 cells around p.
+template <class F>
+QDEMSPH_HD void sph_for_each_near(const CellGrid& g, const std::int64_t* start, Vec3 p,
+                                  bool fluid_only, F&& f) {
+  const int cx = g.coord(p.x, 0), cy = g.coord(p.y, 1), cz = g.coord(p.z, 2);
+  const int x0 = cx > 0 ? cx - 1 : 0, x1 = cx + 1 < g.n[0] ? cx + 1 : g.n[0] - 1;
+  for (int z = cz - 1; z <= cz + 1; ++z) {
+    if (z < 0 || z >= g.n[2]) continue;
+    for (int y = cy - 1; y <= cy + 1; ++y) {
+      if (y < 0 || y >= g.n[1]) continue;
+      const std::int64_t row = g.key(0, y, z);
+      if (fluid_only) {
+        for (std::int64_t c = row + x0; c <= row + x1; ++c)
+          for (std::int64_t j = start[2 * c]; j < start[2 * c + 1]; ++j) f(j);
+      } else {
+        for (std::int64_t j = start[2 * (row + x0)]; j < start[2 * (row + x1 + 1)]; ++j) f(j);
+      }
+    }
+  }
+}
+
 template <class Exec>
 class SphStage final : public FluidStage {
   static constexpr Space S = Exec::space;
 
  public:
-  explicit SphStage(const FluidSetup& f) : P_(f.params), n_(f.size()), nf_(f.n_fluid) {
+  explicit SphStage(const FluidSetup& f)
+      : P_(f.params), n_(f.size()), nf_(f.n_fluid), wall_volume_(f.dx * f.dx * f.dx) {
     x_.assign(f.x);
     v_.assign(f.v);
     a_.resize(n_);
@@ -36,7 +61,8 @@ class SphStage final : public FluidStage {
     m_.assign(f.m);
     type_.assign(f.type);
     gid_.assign(f.gid);
-    cells_.set_grid(CellGrid::cover(f.lo, f.hi, P_.kernel.support()));
+    grid_ = CellGrid::cover(f.lo, f.hi, P_.kernel.support());
+    start_.resize(2 * grid_.count() + 1);
     compute();
   }
 
@@ -62,11 +88,12 @@ class SphStage final : public FluidStage {
   void compute() override {
     sort();
     const SphParams P = P_;
-    const CellGrid g = cells_.grid();
-    const std::int64_t* start = cells_.start().p;
+    const CellGrid g = grid_;
+    const std::int64_t* start = start_.cview().p;
     const auto x = x_.cview(), v = v_.cview();
     const auto type = type_.cview();
-    const auto m = m_.cview();
+    const auto m = m_.view();
+    const double wall_volume = wall_volume_;
     const auto rho = rho_.view();
     const auto p = p_.view();
     const auto drho = drho_.view();
@@ -82,9 +109,11 @@ class SphStage final : public FluidStage {
       }
       const PairState si{x[i], v[i], rho[i], 0.0, m[i]};
       double dr = 0;
-      for_each_near(g, start, si.x, [&](std::int64_t j) {
-        if (j == i) return;
-        const PairState sj{x[j], v[j], rho[j], 0.0, m[j]};
+      const double s2 = P.kernel.support2;
+      sph_for_each_near(g, start, si.x, false, [&](std::int64_t j) {
+        const Vec3 xj = x[j];
+        if (j == i || norm2(si.x - xj) >= s2) return;  // most candidates: no further loads
+        const PairState sj{xj, v[j], rho[j], 0.0, m[j]};
         dr += sph_continuity(P, si, sj);
         if (type[j] == kSphFluid) dr += sph_density_diffusion(P, si, sj);
       });
@@ -101,12 +130,13 @@ class SphStage final : public FluidStage {
       if (type[i] == kSphFluid) return;
       const Vec3 xi = x[i];
       AdamiSum s;
-      for_each_near(g, start, xi, [&](std::int64_t j) {
-        if (type[j] == kSphFluid) adami_add(s, P.kernel, xi, x[j], p[j], rho[j]);
+      sph_for_each_near(g, start, xi, true, [&](std::int64_t j) {
+        adami_add(s, P.kernel, xi, x[j], p[j], rho[j]);
       });
       const double pw = adami_pressure(s, P.gravity, Vec3{});
       p[i] = pw;
       rho[i] = P.eos.density(pw);
+      m[i] = rho[i] * wall_volume;  // a wall particle keeps its volume dx^3
     });
     // Pair sums: acceleration of fluid particles.
     const auto a = a_.view();
@@ -117,9 +147,11 @@ class SphStage final : public FluidStage {
       }
       const PairState si{x[i], v[i], rho[i], p[i], m[i]};
       Vec3 f{};
-      for_each_near(g, start, si.x, [&](std::int64_t j) {
-        if (j == i) return;
-        const PairState sj{x[j], v[j], rho[j], p[j], m[j]};
+      const double s2 = P.kernel.support2;
+      sph_for_each_near(g, start, si.x, false, [&](std::int64_t j) {
+        const Vec3 xj = x[j];
+        if (j == i || norm2(si.x - xj) >= s2) return;
+        const PairState sj{xj, v[j], rho[j], p[j], m[j]};
         f += sph_pair_force(P, si, sj, type[j] == kSphFluid || P.wall_viscosity);
       });
       a.set(i, P.gravity + f / si.m);
@@ -185,14 +217,25 @@ class SphStage final : public FluidStage {
   std::size_t device_bytes() const override {
     return x_.bytes() + v_.bytes() + a_.bytes() + rho_.bytes() + p_.bytes() + drho_.bytes() +
            m_.bytes() + type_.bytes() + gid_.bytes() + tmp3_.bytes() + tmpd_.bytes() +
-           tmpu_.bytes() + tmpt_.bytes() + cells_.bytes();
+           tmpu_.bytes() + tmpt_.bytes() + keys_.bytes() + start_.bytes() + order_.bytes();
   }
 
- private:
-  // Counting sort by cell, then every per-particle array gathered into the new order.
+  // Public only because nvcc's extended lambdas need an accessible enclosing function.
+  // Counting sort by (cell, type) (neighbor/cell_grid.hpp), then every per-particle array
+  // gathered into the new order.
   void sort() {
-    cells_.build(x_.cview());
-    const auto ord = cells_.order();
+    if (keys_.size() != n_) keys_.resize(n_);
+    const auto k = keys_.view();
+    const auto x = x_.cview();
+    const auto type = type_.cview();
+    const CellGrid g = grid_;
+    for_each(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
+      k[i] = 2 * g.key_of(x[i]) + (type[i] == kSphFluid ? 0 : 1);
+    });
+    counting_sort_host(keys_.to_host(), 2 * grid_.count(), hstart_, horder_);
+    start_.assign(hstart_);
+    order_.assign(horder_);
+    const auto ord = order_.cview();
     permute3(x_, ord);
     permute3(v_, ord);
     permute3(a_, ord);
@@ -219,14 +262,18 @@ class SphStage final : public FluidStage {
     std::swap(b, tmp3_);
   }
 
+ private:
   SphParams P_;
   std::int64_t n_ = 0, nf_ = 0;
-  double pending_dt_ = 0;  // time drifted since the last compute(): the density update's dt
+  double pending_dt_ = 0;
+  double wall_volume_ = 0;  // dx^3  // time drifted since the last compute(): the density update's dt
   Vec3Buffer x_{S}, v_{S}, a_{S}, tmp3_{S};
   Buffer<double> rho_{S}, p_{S}, drho_{S}, m_{S}, tmpd_{S};
   Buffer<std::uint8_t> type_{S}, tmpt_{S};
   Buffer<std::uint64_t> gid_{S}, tmpu_{S};
-  CellList<Exec> cells_;
+  CellGrid grid_;
+  Buffer<std::int64_t> keys_{S}, start_{S}, order_{S};
+  std::vector<std::int64_t> hstart_, horder_;
 };
 
 }  // namespace qdemsph

@@ -22,7 +22,7 @@ LB_H, LB_X = 0.3, 0.300
 LB_T = np.array([0, 1, 2, 3, 4, 5, 6], dtype=float)
 LB_h = np.array([1.000, 0.931, 0.783, 0.632, 0.500, 0.402, 0.325])
 
-MM_RES = {"a10": (MM_A / 10, "quick"), "a20": (MM_A / 20, "full")}
+MM_RES = {"a10": (MM_A / 10, "quick"), "a15": (MM_A / 15, "full"), "a20": (MM_A / 20, "full")}
 LB_RES = {"H15": (LB_H / 15, "full"), "H30": (LB_H / 30, "full")}
 
 
