@@ -91,11 +91,8 @@ Json relax_json(const RelaxResult& r) {
 }
 
 std::string stages_of(const Model& model, const FluidSetup* fluid) {
-  const std::size_t free_bodies =
-      std::count_if(model.bodies.begin(), model.bodies.end(), [](auto& b) { return !b.fixed; });
   std::string s = fmt::format("elements ({} free tets), integration ({} free vertices)",
                               model.n_free_tets, model.n_free_vertices);
-  (void)free_bodies;
   s += "; " + describe_contact(model);
   s += fluid ? "; " + describe_fluid(*fluid) : "; no SPH: no fluid";
   return s;
