@@ -5,6 +5,7 @@ observed rates; wall time against error (Pareto) for every method on this machin
 Quick tier: 10x1x1, 20x2x2, 40x4x4. Long tier (--full) adds 80x8x8 and 150x15x15
 (405,000 tets: the report's "0.4 % at 450,000 tets" point). FEniCSx runs live here on every
 mesh (P2 up to 80x8x8) and must reproduce the stored references (make references)."""
+import json
 import math
 from pathlib import Path
 
@@ -13,6 +14,7 @@ import pytest
 from harness import cantilever as cl
 from harness import must
 from harness import paths  # noqa: F401  (makes meshio41 importable)
+from harness.paths import REPO
 from harness.fenicsx import FenicsxError, solve_cantilever, stored_results
 from harness.qdemsph import QdemsphError, write_scene_variant
 
@@ -136,6 +138,14 @@ def test_refinement_ladder(tier, qdemsph, checks, case_out):
                       xlabel="wall time (s)", ylabel="|w - w_conv| / |w_conv|", xscale="log", yscale="log",
                       title="Speed against error (this machine)",
                       labels=[p[3] for p in pts_])
+    # The committed GPU series (ci/gpu/cantilever_ladder.py on an H200; another machine, so
+    # its wall times are that machine's): plotted, not checked here.
+    for rec in sorted((REPO / "references/benchmarks/gpu").glob("*_cantilever_ladder.json")):
+        g = json.loads(rec.read_text())["records"]
+        checks.series("cantilever_pareto", f"qdemsph (cuda, {rec.name.split('_')[1]}, recorded)",
+                      [r["solver_wall_s"] for r in g], [r["error_vs_converged"] for r in g],
+                      style="line", labels=[r["mesh"] for r in g],
+                      note=f"from {rec.relative_to(REPO)}")
     # Ratio to beam theory for the report: stored references (all meshes) plus live qdemsph.
     for deg in (1, 2):
         rr = sorted((r for r in stored["rows"] if r["degree"] == deg), key=lambda r: r["n_tets"])
