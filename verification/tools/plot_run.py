@@ -5,6 +5,7 @@ snapshots.png (deformed shape coloured by von Mises stress at several times).
 Usage: /usr/bin/python3 verification/tools/plot_run.py RUN_DIR
 """
 import csv
+import json
 import sys
 from pathlib import Path
 
@@ -16,6 +17,14 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 ENERGIES = ["kinetic", "strain", "potential", "dissipated", "total"]
+
+
+def title_of(run):
+    """The scene's name from summary.json, else the folder's."""
+    try:
+        return json.loads((run / "summary.json").read_text())["name"]
+    except (OSError, KeyError, ValueError):
+        return run.name
 
 
 def read_probes(path):
@@ -42,7 +51,7 @@ def plot_probes(run, cols):
     ax.set_xlabel("time [s]")
     ax.legend(loc="upper right", fontsize=8)
     ax.grid(alpha=0.3)
-    fig.suptitle(run.name)
+    fig.suptitle(title_of(run))
     fig.tight_layout()
     fig.savefig(run / "probes.png", dpi=110)
     plt.close(fig)
@@ -70,7 +79,7 @@ def plot_snapshots(run, frames=6):
         ax.set_ylabel(f"t = {t:.3f} s", fontsize=8)
     axes[-1].set_xlabel("xyz"[a] + " [m]")
     fig.colorbar(sc, ax=list(axes), label="von Mises [Pa]")
-    fig.suptitle(f"{run.name}: tet centroids coloured by von Mises stress")
+    fig.suptitle(f"{title_of(run)}: tet centroids coloured by von Mises stress")
     fig.savefig(run / "snapshots.png", dpi=110)
     plt.close(fig)
 
