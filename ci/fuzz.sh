@@ -24,7 +24,8 @@ mkdir -p "$OUT/obj" "$OUT/artifacts" "$OUT/corpus"
 # Compile only what the targets need (the parser, the mesh reader), instrumented.
 FLAGS=(-std=c++20 -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined
        -fno-sanitize-recover=undefined -Isolver)
-declare -A SRC=([scene]=solver/io/scene_yaml.cpp [gmsh]=solver/mesh/gmsh_io.cpp)
+declare -A SRC=([scene]=solver/io/scene_yaml.cpp [gmsh]=solver/mesh/gmsh_io.cpp
+                [msh_precheck]=solver/mesh/msh_precheck.cpp)
 t0=$(date +%s)
 for k in "${!SRC[@]}"; do
   o="$OUT/obj/$k.o"
@@ -33,7 +34,7 @@ for k in "${!SRC[@]}"; do
   fi
 done
 declare -A OBJS=([fuzz_scene]="$OUT/obj/scene.o" [fuzz_scene_overrides]="$OUT/obj/scene.o"
-                 [fuzz_gmsh]="$OUT/obj/gmsh.o")
+                 [fuzz_gmsh]="$OUT/obj/gmsh.o $OUT/obj/msh_precheck.o")
 declare -A LIBS=([fuzz_scene]="-lyaml-cpp" [fuzz_scene_overrides]="-lyaml-cpp" [fuzz_gmsh]="-lgmsh")
 for t in "${TARGETS[@]}"; do
   [[ -n ${OBJS[$t]:-} ]] || { echo "fuzz.sh: unknown target '$t'" >&2; exit 2; }

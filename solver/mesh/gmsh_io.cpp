@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "mesh/msh_precheck.hpp"
 
 namespace qdemsph {
 
@@ -163,6 +164,7 @@ TetMesh read_gmsh(const std::filesystem::path& path) {
     throw InputError("mesh file " + quoted(path) + ": cannot be opened for reading");
   if (std::filesystem::file_size(path, ec) == 0 && !ec)
     throw InputError("mesh file " + quoted(path) + ": empty file");
+  precheck_ascii_msh(path);  // libgmsh 4.8 crashes on some truncated files
 
   std::vector<std::size_t> node_tags, elem_tags, elem_nodes;
   std::vector<double> coords, param;
