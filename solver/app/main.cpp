@@ -19,8 +19,7 @@ int main(int argc, char** argv) {
   std::string scene_file;
   std::vector<std::string> overrides;
   auto add_scene = [&](CLI::App* sub) {
-    sub->add_option("scene", scene_file, "scene file (YAML, see docs/scene-format.md)")
-        ->required();
+    sub->add_option("scene", scene_file, "scene file (YAML, see docs/scene-format.md)")->required();
     sub->add_option("--set", overrides, "override a scene key: dotted.key=yaml_value (repeatable)");
   };
 

@@ -4,9 +4,9 @@
 #include <omp.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <optional>
-#include <cmath>
 
 #include "core/error.hpp"
 #include "core/gpu_info.hpp"
@@ -123,9 +123,10 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     fluid_setup = build_fluid(scene.fluid, scene.gravity);
     const double dtf = fluid_dt(*fluid_setup);
     if (scene.run.dt && *scene.run.dt > dtf)
-      throw InputError(fmt::format("run.dt = {:.4e} s exceeds the fluid's time-step limit {:.4e} s "
-                                   "(CFL with c0 = {:.4g} m/s)",
-                                   *scene.run.dt, dtf, fluid_setup->params.eos.c0));
+      throw InputError(
+          fmt::format("run.dt = {:.4e} s exceeds the fluid's time-step limit {:.4e} s "
+                      "(CFL with c0 = {:.4g} m/s)",
+                      *scene.run.dt, dtf, fluid_setup->params.eos.c0));
     if (!scene.run.dt) dt = model.dt_critical_tet >= 0 ? std::min(dt, dtf) : dtf;
     fluid = make_fluid_stage(backend_name, *fluid_setup);
   }
@@ -195,7 +196,8 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       double xm = -1e300, ym = -1e300;
       for (std::size_t i = 0; i < fh.x.size(); ++i)
         if (fh.type[i] == kSphFluid) xm = std::max(xm, fh.x[i].x), ym = std::max(ym, fh.x[i].y);
-      fmt::print(fluid_csv, "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.6g}\n",
+      fmt::print(fluid_csv,
+                 "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.6g}\n",
                  st.time(), fs.kinetic, fs.momentum.x, fs.momentum.y, fs.momentum.z, fs.v_max,
                  fs.rho_dev, xm, ym, fluid->dt_limits().min());
       std::fflush(fluid_csv);
@@ -249,13 +251,15 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     bool preload = false;
     for (const auto& l : scene.loads) preload = preload || l.preload;
     auto relax_progress = [&](std::int64_t it, double res) {
-      const double frac = res > 0 ? std::clamp(std::log(res) / std::log(scene.run.static_tolerance), 0.0, 1.0) : 1.0;
+      const double frac =
+          res > 0 ? std::clamp(std::log(res) / std::log(scene.run.static_tolerance), 0.0, 1.0)
+                  : 1.0;
       progress.update(frac, it, fmt::format("residual {:.2e}", res).c_str());
     };
     if (scene.run.mode == RunMode::Static) {
       write_probes();
-      const RelaxResult r = st.relax(scene.run.static_tolerance, scene.run.static_max_steps,
-                                     false, relax_progress);
+      const RelaxResult r =
+          st.relax(scene.run.static_tolerance, scene.run.static_max_steps, false, relax_progress);
       progress.finish();
       summary["static"] = relax_json(r);
       write_probes();
@@ -274,8 +278,8 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       return code;
     }
     if (preload) {
-      const RelaxResult r = st.relax(scene.run.static_tolerance, scene.run.static_max_steps,
-                                     true, relax_progress);
+      const RelaxResult r =
+          st.relax(scene.run.static_tolerance, scene.run.static_max_steps, true, relax_progress);
       progress.finish();
       summary["preload"] = relax_json(r);
       if (!r.converged)
@@ -318,8 +322,8 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     throw;
   }
   if (!opt.quiet)
-    fmt::print("{}: {} steps, t = {:.6g} s, wall {:.2f} s; output in {}\n", scene.name,
-               st.steps(), st.time(),
+    fmt::print("{}: {} steps, t = {:.6g} s, wall {:.2f} s; output in {}\n", scene.name, st.steps(),
+               st.time(),
                std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count(),
                dir.string());
   return code;
@@ -341,14 +345,16 @@ void print_info(const Scene& scene) {
                b.t_end - b.t_begin, b.fixed ? "  (fixed: not integrated)" : "");
   fmt::print("sizes      {} vertices, {} tets, {} surface triangles\n", model.n_vertices(),
              model.n_tets(), model.surface.size());
-  fmt::print("dt         {:.4e} s (stability limit {:.4e} s{})\n", dt, model.dt_critical,
-             scene.run.dt ? ", fixed by the scene" : fmt::format(", safety {}", scene.run.dt_safety));
+  fmt::print(
+      "dt         {:.4e} s (stability limit {:.4e} s{})\n", dt, model.dt_critical,
+      scene.run.dt ? ", fixed by the scene" : fmt::format(", safety {}", scene.run.dt_safety));
   if (scene.run.mode == RunMode::Dynamic)
     fmt::print("steps      {} to t = {} s\n",
                static_cast<std::int64_t>(std::ceil(scene.run.end_time / dt - 1e-9)),
                scene.run.end_time);
   if (fluid_setup)
-    fmt::print("fluid dt   {:.4e} s (CFL/force/viscous limit at the start)\n", fluid_dt(*fluid_setup));
+    fmt::print("fluid dt   {:.4e} s (CFL/force/viscous limit at the start)\n",
+               fluid_dt(*fluid_setup));
   fmt::print("memory     {:.1f} MiB of solver state ({:.0f} bytes per tet)\n",
              be->device_bytes() / 1048576.0,
              model.n_tets() ? static_cast<double>(be->device_bytes()) / model.n_tets() : 0.0);

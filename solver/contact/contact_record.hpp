@@ -21,8 +21,8 @@ struct ContactRecord {
   std::uint64_t k1 = 0, k2 = 0;
   std::int32_t v[4] = {-1, -1, -1, -1};
   double w[4] = {0, 0, 0, 0};
-  Vec3 n;            // from side 2 towards side 1
-  double d = 0;      // signed gap along n
+  Vec3 n;        // from side 2 towards side 1
+  double d = 0;  // signed gap along n
   std::int32_t type = 0, n1 = 1;
   std::int32_t body1 = 0, body2 = -1;  // body2 = -1: wall (index in `wall`)
   std::int32_t wall = -1;

@@ -12,7 +12,8 @@
 namespace qdemsph {
 
 inline void sort_records(HostExec, View<ContactRecord> r, std::int64_t n) {
-  std::sort(r.p, r.p + n, [](const ContactRecord& a, const ContactRecord& b) { return key_less(a, b); });
+  std::sort(r.p, r.p + n,
+            [](const ContactRecord& a, const ContactRecord& b) { return key_less(a, b); });
 }
 
 }  // namespace qdemsph

@@ -25,8 +25,8 @@
 #include <cstdint>
 #include <map>
 #include <memory>
-#include <utility>
 #include <string>
+#include <utility>
 
 #include "contact/contact_record.hpp"
 #include "contact/contact_sort_host.hpp"
@@ -65,7 +65,8 @@ struct ContactTopology {
 
   // Contacts between the features owned by triangles a and b; writes them to out (if not
   // null) and returns how many.
-  QDEMSPH_HD int narrow_tris(Vec3CView x, std::int64_t a, std::int64_t b, ContactRecord* out) const {
+  QDEMSPH_HD int narrow_tris(Vec3CView x, std::int64_t a, std::int64_t b,
+                             ContactRecord* out) const {
     const int ba = tri_body[a], bb = tri_body[b];
     const bool same = ba == bb;
     const double ha = body_h[ba], hb = body_h[bb];
@@ -207,8 +208,8 @@ class ContactStage {
     std::vector<double> wall(8 * nw_);
     for (std::int64_t w = 0; w < nw_; ++w) {
       const ContactWall& cw = c.walls[w];
-      const double vals[8] = {cw.point.x,  cw.point.y, cw.point.z, cw.normal.x,
-                              cw.normal.y, cw.normal.z, cw.mu,     cw.zeta};
+      const double vals[8] = {cw.point.x,  cw.point.y,  cw.point.z, cw.normal.x,
+                              cw.normal.y, cw.normal.z, cw.mu,      cw.zeta};
       for (int k = 0; k < 8; ++k) wall[8 * w + k] = vals[k];
     }
     wall_.assign(wall);
@@ -261,12 +262,13 @@ class ContactStage {
   std::int64_t steps() const { return steps_; }
   std::int64_t pair_rebuilds() const { return rebuilds_; }
   std::size_t bytes() const {
-    return tri_v_.bytes() + edge_v_.bytes() + edge_tri_.bytes() + tri_n_.bytes() + prim_v_.bytes() + tri_body_.bytes() + prim_body_.bytes() +
-           own_v_off_.bytes() + own_e_off_.bytes() + own_v_.bytes() + own_e_.bytes() +
-           prim_tri_off_.bytes() + prim_tri_.bytes() + pc_.bytes() + pr_.bytes() + cnt_.bytes() +
-           rec_.bytes() + ent_f_.bytes() + ent_v_.bytes() + vcnt_.bytes() + vcur_.bytes() +
-           vent_.bytes() + pact_.bytes() + nact_.bytes() + pk1_.bytes() + pk2_.bytes() + pxi_.bytes() + nk1_.bytes() + nk2_.bytes() +
-           nxi_.bytes() + cells_.bytes() + pairs_.bytes();
+    return tri_v_.bytes() + edge_v_.bytes() + edge_tri_.bytes() + tri_n_.bytes() + prim_v_.bytes() +
+           tri_body_.bytes() + prim_body_.bytes() + own_v_off_.bytes() + own_e_off_.bytes() +
+           own_v_.bytes() + own_e_.bytes() + prim_tri_off_.bytes() + prim_tri_.bytes() +
+           pc_.bytes() + pr_.bytes() + cnt_.bytes() + rec_.bytes() + ent_f_.bytes() +
+           ent_v_.bytes() + vcnt_.bytes() + vcur_.bytes() + vent_.bytes() + pact_.bytes() +
+           nact_.bytes() + pk1_.bytes() + pk2_.bytes() + pxi_.bytes() + nk1_.bytes() +
+           nk2_.bytes() + nxi_.bytes() + cells_.bytes() + pairs_.bytes();
   }
 
   ContactTopology topology() const {
@@ -310,44 +312,51 @@ class ContactStage {
     const auto pv = prim_v_.cview();
     const auto pc = pc_.view();
     const auto pr = pr_.view();
-    for_each(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) {
-      Vec3 q[4];
-      int k = 0;
-      Vec3 c{};
-      for (; k < 4; ++k) {
-        const int i = pv[k * np + p];
-        if (i < 0) break;
-        q[k] = x[i];
-        c += q[k];
-      }
-      c = c / static_cast<double>(k);
-      double r2 = 0;
-      for (int j = 0; j < k; ++j) {
-        const double d2 = norm2(q[j] - c);
-        r2 = d2 > r2 ? d2 : r2;
-      }
-      pc.set(p, c);
-      pr[p] = sqrt(r2);
-    });
+    for_each(
+        Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) {
+          Vec3 q[4];
+          int k = 0;
+          Vec3 c{};
+          for (; k < 4; ++k) {
+            const int i = pv[k * np + p];
+            if (i < 0) break;
+            q[k] = x[i];
+            c += q[k];
+          }
+          c = c / static_cast<double>(k);
+          double r2 = 0;
+          for (int j = 0; j < k; ++j) {
+            const double d2 = norm2(q[j] - c);
+            r2 = d2 > r2 ? d2 : r2;
+          }
+          pc.set(p, c);
+          pr[p] = sqrt(r2);
+        });
     const auto cc = pc_.cview();
     const auto rr = pr_.cview();
     Vec3 lo, hi;
     for (int a = 0; a < 3; ++a) {
       const double* ca = a == 0 ? cc.x : (a == 1 ? cc.y : cc.z);
-      hi[a] = reduce_max(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return ca[p]; }, -1e300);
-      lo[a] = -reduce_max(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return -ca[p]; }, -1e300);
+      hi[a] = reduce_max(
+          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return ca[p]; }, -1e300);
+      lo[a] = -reduce_max(
+          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return -ca[p]; }, -1e300);
     }
-    const double rmax = reduce_max(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return rr[p]; }, 0.0);
+    const double rmax = reduce_max(
+        Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return rr[p]; }, 0.0);
     // Verlet skin: the pair list built with gap D_DEM + skin stays a superset of the pairs
     // within D_DEM until some primitive's centroid has moved, plus its radius changed, by
     // skin / 2. Checked every step (one pass); the list is rebuilt only then.
     if (built_) {
       const auto c0 = pc_ref_.cview();
       const auto r0 = pr_ref_.cview();
-      const double moved = reduce_max(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) {
-        const double dr = rr[p] - r0[p];
-        return norm(cc[p] - c0[p]) + (dr > 0 ? dr : -dr);
-      }, 0.0);
+      const double moved = reduce_max(
+          Exec{}, np,
+          QDEMSPH_LAMBDA(std::int64_t p) {
+            const double dr = rr[p] - r0[p];
+            return norm(cc[p] - c0[p]) + (dr > 0 ? dr : -dr);
+          },
+          0.0);
       if (skin_ > 0 && moved <= 0.5 * skin_) return pairs_.size();
     }
     skin_ = skin_setting_ >= 0 ? skin_setting_ : d_dem_ + 0.25 * rmax;
@@ -365,27 +374,29 @@ class ContactStage {
     {
       const auto c0 = pc_ref_.view();
       const auto r0 = pr_ref_.view();
-      for_each(Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) {
-        c0.set(p, cc[p]);
-        r0[p] = rr[p];
-      });
+      for_each(
+          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) {
+            c0.set(p, cc[p]);
+            r0[p] = rr[p];
+          });
     }
     built_ = true;
     ++rebuilds_;
-    return pairs_.build(cells_, cc, rr, gap, npf_, QDEMSPH_LAMBDA(std::int64_t i, std::int64_t j)->bool {
-      const int bi = pb[i], bj = pb[j];
-      if (fixed[bi] && fixed[bj]) return false;
-      if (bi != bj) return true;
-      if (!self) return false;
-      // Self-contact: primitives sharing a vertex are neighbours in the mesh, not a touch.
-      for (int a = 0; a < 4; ++a) {
-        const int va = pvv[a * np + i];
-        if (va < 0) break;
-        for (int b = 0; b < 4; ++b)
-          if (pvv[b * np + j] == va) return false;
-      }
-      return true;
-    });
+    return pairs_.build(
+        cells_, cc, rr, gap, npf_, QDEMSPH_LAMBDA(std::int64_t i, std::int64_t j)->bool {
+          const int bi = pb[i], bj = pb[j];
+          if (fixed[bi] && fixed[bj]) return false;
+          if (bi != bj) return true;
+          if (!self) return false;
+          // Self-contact: primitives sharing a vertex are neighbours in the mesh, not a touch.
+          for (int a = 0; a < 4; ++a) {
+            const int va = pvv[a * np + i];
+            if (va < 0) break;
+            for (int b = 0; b < 4; ++b)
+              if (pvv[b * np + j] == va) return false;
+          }
+          return true;
+        });
   }
 
   // Records of all contacts, sorted by key, duplicates of one touch deactivated.
@@ -394,12 +405,13 @@ class ContactStage {
       const std::int64_t ntri = ntri_;
       const auto tv = tri_v_.cview();
       const auto tn = tri_n_.view();
-      for_each(Exec{}, ntri, QDEMSPH_LAMBDA(std::int64_t s) {
-        const Vec3 p0 = x[tv[s]], p1 = x[tv[ntri + s]], p2 = x[tv[2 * ntri + s]];
-        const Vec3 m = cross(p1 - p0, p2 - p0);
-        const double l = norm(m);
-        tn.set(s, l > 0 ? m / l : Vec3{});
-      });
+      for_each(
+          Exec{}, ntri, QDEMSPH_LAMBDA(std::int64_t s) {
+            const Vec3 p0 = x[tv[s]], p1 = x[tv[ntri + s]], p2 = x[tv[2 * ntri + s]];
+            const Vec3 m = cross(p1 - p0, p2 - p0);
+            const double l = norm(m);
+            tn.set(s, l > 0 ? m / l : Vec3{});
+          });
     }
     const ContactTopology topo = topology();
     const std::int64_t np = npf_, nwv = nwv_, nw = nw_;  // pairs start at free primitives
@@ -411,7 +423,7 @@ class ContactStage {
     const auto wall = wall_.cview();
     const auto vb = vertex_body_.cview();
     const double d_dem = d_dem_;
-    auto prim_contacts = QDEMSPH_LAMBDA(std::int64_t i, ContactRecord* out)->std::int64_t {
+    auto prim_contacts = QDEMSPH_LAMBDA(std::int64_t i, ContactRecord * out)->std::int64_t {
       std::int64_t n = 0;
       for (std::int64_t q = ps[i]; q < ps[i + 1]; ++q) {
         const int j = sec[q];
@@ -421,7 +433,7 @@ class ContactStage {
       }
       return n;
     };
-    auto wall_contacts = QDEMSPH_LAMBDA(std::int64_t k, ContactRecord* out)->std::int64_t {
+    auto wall_contacts = QDEMSPH_LAMBDA(std::int64_t k, ContactRecord * out)->std::int64_t {
       const int A = wv[k];
       const Vec3 xa = x[A];
       std::int64_t n = 0;
@@ -450,31 +462,34 @@ class ContactStage {
       return n;
     };
     const auto cnt = cnt_.view();
-    for_each(Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
-      cnt[i] = i < np ? prim_contacts(i, nullptr) : wall_contacts(i - np, nullptr);
-    });
+    for_each(
+        Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
+          cnt[i] = i < np ? prim_contacts(i, nullptr) : wall_contacts(i - np, nullptr);
+        });
     const std::int64_t nc = exclusive_scan(Exec{}, cnt, np + nwv);
     if (rec_.size() < nc) rec_.resize(nc + nc / 4 + 64);
     const auto rec = rec_.view();
-    for_each(Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
-      ContactRecord* out = rec.p + cnt[i];
-      if (i < np)
-        prim_contacts(i, out);
-      else
-        wall_contacts(i - np, out);
-    });
+    for_each(
+        Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
+          ContactRecord* out = rec.p + cnt[i];
+          if (i < np)
+            prim_contacts(i, out);
+          else
+            wall_contacts(i - np, out);
+        });
     sort_records(Exec{}, rec, nc);
     // One vertex touching one body: keep the point-face hit with the largest gap.
-    for_each(Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
-      ContactRecord& r = rec[c];
-      if (r.type != kPointFace) return;
-      bool keep = true;
-      for (std::int64_t o = c - 1; o >= 0 && rec[o].k1 == r.k1 && keep; --o)
-        if (rec[o].body2 == r.body2 && rec[o].d >= r.d) keep = false;  // lower key wins ties
-      for (std::int64_t o = c + 1; o < nc && rec[o].k1 == r.k1 && keep; ++o)
-        if (rec[o].body2 == r.body2 && rec[o].d > r.d) keep = false;
-      r.active = keep ? 1 : 0;
-    });
+    for_each(
+        Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
+          ContactRecord& r = rec[c];
+          if (r.type != kPointFace) return;
+          bool keep = true;
+          for (std::int64_t o = c - 1; o >= 0 && rec[o].k1 == r.k1 && keep; --o)
+            if (rec[o].body2 == r.body2 && rec[o].d >= r.d) keep = false;  // lower key wins ties
+          for (std::int64_t o = c + 1; o < nc && rec[o].k1 == r.k1 && keep; ++o)
+            if (rec[o].body2 == r.body2 && rec[o].d > r.d) keep = false;
+          r.active = keep ? 1 : 0;
+        });
     return nc;
   }
 
@@ -510,68 +525,73 @@ class ContactStage {
     const auto ef = ent_f_.view();
     const int nm = nm_;
     const double d_dem = d_dem_, knf = kn_factor_, ktr = kt_ratio_;
-    for_each(Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
-      const ContactRecord& r = rec[c];
-      nk1[c] = r.k1;
-      nk2[c] = r.k2;
-      nxi.set(c, Vec3{});
-      nact[c] = 0;
-      for (int k = 0; k < 4; ++k) ev[4 * c + k] = -1;
-      if (!r.active) return;
-      Vec3 v1{}, v2{};
-      double im1 = 0, im2 = 0;
-      for (int k = 0; k < 4; ++k) {
-        const int i = r.v[k];
-        if (i < 0) continue;
-        if (k < r.n1) {
-          v1 += r.w[k] * v[i];
-          im1 += r.w[k] * im[i];
-        } else {
-          v2 += r.w[k] * v[i];
-          im2 += r.w[k] * im[i];
-        }
-      }
-      const double inv_eff = im1 + im2;
-      if (!(inv_eff > 0)) return;  // both sides immobile
-      ContactLaw law;
-      const int m1 = bmat[r.body1];
-      if (r.body2 < 0) {
-        const std::int64_t w = r.wall;
-        law.mu = wall[8 * w + 6];
-        law.zeta = wall[8 * w + 7];
-        law.kn = wkn[w] > 0 ? wkn[w] : knf * pE[m1 * nm + m1] * bh[r.body1];
-      } else {
-        const int mp = m1 * nm + bmat[r.body2];
-        const double h1 = bh[r.body1], h2 = bh[r.body2];
-        law.mu = pmu[mp];
-        law.zeta = pzeta[mp];
-        law.kn = pkn[mp] > 0 ? pkn[mp] : knf * pE[mp] * (h1 < h2 ? h1 : h2);
-      }
-      law.kt = ktr * law.kn;
-      // Tangential history of this feature pair from the previous step (sorted keys).
-      Vec3 xi{};
-      std::int64_t lo = 0, hi = nprev;
-      while (lo < hi) {
-        const std::int64_t mid = (lo + hi) / 2;
-        if (pk1[mid] < r.k1 || (pk1[mid] == r.k1 && pk2[mid] < r.k2))
-          lo = mid + 1;
-        else
-          hi = mid;
-      }
-      const bool known = lo < nprev && pk1[lo] == r.k1 && pk2[lo] == r.k2 && pact[lo];
-      if (known) xi = pxi[lo];
-      // A touch starts with a gap above -D_DEM; a deeper one must have been a contact the
-      // step before (continuity). Otherwise it is the back face of a thin body seen through
-      // it, not a penetration.
-      if (r.d < -d_dem && !known) return;
-      nact[c] = 1;
-      const ContactForce cf = contact_force(law, r.n, d_dem - r.d, v1 - v2, xi, dt, 1.0 / inv_eff);
-      if (dt > 0) nxi.set(c, cf.xi); else nxi.set(c, xi);
-      for (int k = 0; k < 4; ++k) {
-        ev[4 * c + k] = r.v[k];
-        ef.set(4 * c + k, (k < r.n1 ? r.w[k] : -r.w[k]) * cf.f);
-      }
-    });
+    for_each(
+        Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
+          const ContactRecord& r = rec[c];
+          nk1[c] = r.k1;
+          nk2[c] = r.k2;
+          nxi.set(c, Vec3{});
+          nact[c] = 0;
+          for (int k = 0; k < 4; ++k) ev[4 * c + k] = -1;
+          if (!r.active) return;
+          Vec3 v1{}, v2{};
+          double im1 = 0, im2 = 0;
+          for (int k = 0; k < 4; ++k) {
+            const int i = r.v[k];
+            if (i < 0) continue;
+            if (k < r.n1) {
+              v1 += r.w[k] * v[i];
+              im1 += r.w[k] * im[i];
+            } else {
+              v2 += r.w[k] * v[i];
+              im2 += r.w[k] * im[i];
+            }
+          }
+          const double inv_eff = im1 + im2;
+          if (!(inv_eff > 0)) return;  // both sides immobile
+          ContactLaw law;
+          const int m1 = bmat[r.body1];
+          if (r.body2 < 0) {
+            const std::int64_t w = r.wall;
+            law.mu = wall[8 * w + 6];
+            law.zeta = wall[8 * w + 7];
+            law.kn = wkn[w] > 0 ? wkn[w] : knf * pE[m1 * nm + m1] * bh[r.body1];
+          } else {
+            const int mp = m1 * nm + bmat[r.body2];
+            const double h1 = bh[r.body1], h2 = bh[r.body2];
+            law.mu = pmu[mp];
+            law.zeta = pzeta[mp];
+            law.kn = pkn[mp] > 0 ? pkn[mp] : knf * pE[mp] * (h1 < h2 ? h1 : h2);
+          }
+          law.kt = ktr * law.kn;
+          // Tangential history of this feature pair from the previous step (sorted keys).
+          Vec3 xi{};
+          std::int64_t lo = 0, hi = nprev;
+          while (lo < hi) {
+            const std::int64_t mid = (lo + hi) / 2;
+            if (pk1[mid] < r.k1 || (pk1[mid] == r.k1 && pk2[mid] < r.k2))
+              lo = mid + 1;
+            else
+              hi = mid;
+          }
+          const bool known = lo < nprev && pk1[lo] == r.k1 && pk2[lo] == r.k2 && pact[lo];
+          if (known) xi = pxi[lo];
+          // A touch starts with a gap above -D_DEM; a deeper one must have been a contact the
+          // step before (continuity). Otherwise it is the back face of a thin body seen through
+          // it, not a penetration.
+          if (r.d < -d_dem && !known) return;
+          nact[c] = 1;
+          const ContactForce cf =
+              contact_force(law, r.n, d_dem - r.d, v1 - v2, xi, dt, 1.0 / inv_eff);
+          if (dt > 0)
+            nxi.set(c, cf.xi);
+          else
+            nxi.set(c, xi);
+          for (int k = 0; k < 4; ++k) {
+            ev[4 * c + k] = r.v[k];
+            ef.set(4 * c + k, (k < r.n1 ? r.w[k] : -r.w[k]) * cf.f);
+          }
+        });
     // The keys and springs become the next step's history (already sorted).
     std::swap(pk1_, nk1_);
     std::swap(pk2_, nk2_);
@@ -589,43 +609,46 @@ class ContactStage {
     (void)nv;
     vcnt_.zero();  // memset: no parallel region for a loop without work
     vcur_.zero();
-    for_each(Exec{}, ne4, QDEMSPH_LAMBDA(std::int64_t e) {
-      if (evc[e] >= 0) atomic_inc(&vcnt[evc[e]]);
-    });
+    for_each(
+        Exec{}, ne4, QDEMSPH_LAMBDA(std::int64_t e) {
+          if (evc[e] >= 0) atomic_inc(&vcnt[evc[e]]);
+        });
     exclusive_scan(Exec{}, vcnt, nv);
-    for_each(Exec{}, ne4, QDEMSPH_LAMBDA(std::int64_t e) {
-      const int i = evc[e];
-      if (i >= 0) vent[vcnt[i] + atomic_inc(&vcur[i])] = static_cast<int>(e);
-    });
-    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-      const int b = vcnt[i], e = vcnt[i + 1];
-      if (b == e) return;
-      for (int k = b + 1; k < e; ++k) {  // insertion sort: a vertex has few entries
-        const int val = vent[k];
-        int j = k - 1;
-        while (j >= b && vent[j] > val) {
-          vent[j + 1] = vent[j];
-          --j;
-        }
-        vent[j + 1] = val;
-      }
-      Vec3 s{};
-      for (int k = b; k < e; ++k) s += efc[vent[k]];
-      f.set(i, f[i] + s);
-    });
+    for_each(
+        Exec{}, ne4, QDEMSPH_LAMBDA(std::int64_t e) {
+          const int i = evc[e];
+          if (i >= 0) vent[vcnt[i] + atomic_inc(&vcur[i])] = static_cast<int>(e);
+        });
+    for_each(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+          const int b = vcnt[i], e = vcnt[i + 1];
+          if (b == e) return;
+          for (int k = b + 1; k < e; ++k) {  // insertion sort: a vertex has few entries
+            const int val = vent[k];
+            int j = k - 1;
+            while (j >= b && vent[j] > val) {
+              vent[j + 1] = vent[j];
+              --j;
+            }
+            vent[j + 1] = val;
+          }
+          Vec3 s{};
+          for (int k = b; k < e; ++k) s += efc[vent[k]];
+          f.set(i, f[i] + s);
+        });
     const auto pxc = rec_.cview();
     const auto act = pact_.cview();  // this step's, after the swap
-    stats_.active = static_cast<std::int64_t>(reduce_sum(Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
-      return static_cast<double>(act[c]);
-    }));
-    stats_.max_overlap = reduce_max(Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
-      return act[c] ? d_dem - pxc[c].d : 0.0;
-    }, 0.0);
+    stats_.active = static_cast<std::int64_t>(reduce_sum(
+        Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) { return static_cast<double>(act[c]); }));
+    stats_.max_overlap = reduce_max(
+        Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) { return act[c] ? d_dem - pxc[c].d : 0.0; },
+        0.0);
     if (stats_.max_overlap > max_overlap_ever_) max_overlap_ever_ = stats_.max_overlap;
   }
 
  private:
-  std::int64_t nv_ = 0, nfv_ = 0, ntri_ = 0, ne_ = 0, np_ = 0, npf_ = 0, nwv_ = 0, nw_ = 0, n_prev_ = 0;
+  std::int64_t nv_ = 0, nfv_ = 0, ntri_ = 0, ne_ = 0, np_ = 0, npf_ = 0, nwv_ = 0, nw_ = 0,
+               n_prev_ = 0;
   double d_dem_ = 0, kn_factor_ = 0.5, kt_ratio_ = 2.0 / 7.0;
   bool self_ = false;
   int nm_ = 0;

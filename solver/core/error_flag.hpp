@@ -14,8 +14,8 @@ QDEMSPH_HD void raise_flag(unsigned long long* flag, std::int64_t index) {
   atomicCAS(flag, 0ULL, static_cast<unsigned long long>(index) + 1ULL);
 #else
   unsigned long long expected = 0;
-  __atomic_compare_exchange_n(flag, &expected, static_cast<unsigned long long>(index) + 1ULL,
-                              false, __ATOMIC_RELAXED, __ATOMIC_RELAXED);
+  __atomic_compare_exchange_n(flag, &expected, static_cast<unsigned long long>(index) + 1ULL, false,
+                              __ATOMIC_RELAXED, __ATOMIC_RELAXED);
 #endif
 }
 

@@ -2,8 +2,8 @@
 
 #include <cstdlib>
 #include <cstring>
-#include <stdexcept>
 #include <new>
+#include <stdexcept>
 
 namespace qdemsph {
 

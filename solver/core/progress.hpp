@@ -23,8 +23,8 @@ class ProgressLine {
     const double el = std::chrono::duration<double>(now - start_).count();
     const double rate = el > 0 ? steps / el : 0;
     const double eta = fraction > 0 ? el * (1 - fraction) / fraction : 0;
-    std::fprintf(stderr, "\r%5.1f%%  %s  %lld steps  %.0f steps/s  ETA %.0f s   ",
-                 100 * fraction, label, static_cast<long long>(steps), rate, eta);
+    std::fprintf(stderr, "\r%5.1f%%  %s  %lld steps  %.0f steps/s  ETA %.0f s   ", 100 * fraction,
+                 label, static_cast<long long>(steps), rate, eta);
     std::fflush(stderr);
     drawn_ = true;
   }

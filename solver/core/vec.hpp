@@ -28,8 +28,18 @@ QDEMSPH_HD Vec3 operator-(Vec3 a) { return {-a.x, -a.y, -a.z}; }
 QDEMSPH_HD Vec3 operator*(double s, Vec3 a) { return {s * a.x, s * a.y, s * a.z}; }
 QDEMSPH_HD Vec3 operator*(Vec3 a, double s) { return {s * a.x, s * a.y, s * a.z}; }
 QDEMSPH_HD Vec3 operator/(Vec3 a, double s) { return {a.x / s, a.y / s, a.z / s}; }
-QDEMSPH_HD Vec3& operator+=(Vec3& a, Vec3 b) { a.x += b.x; a.y += b.y; a.z += b.z; return a; }
-QDEMSPH_HD Vec3& operator-=(Vec3& a, Vec3 b) { a.x -= b.x; a.y -= b.y; a.z -= b.z; return a; }
+QDEMSPH_HD Vec3& operator+=(Vec3& a, Vec3 b) {
+  a.x += b.x;
+  a.y += b.y;
+  a.z += b.z;
+  return a;
+}
+QDEMSPH_HD Vec3& operator-=(Vec3& a, Vec3 b) {
+  a.x -= b.x;
+  a.y -= b.y;
+  a.z -= b.z;
+  return a;
+}
 QDEMSPH_HD double dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 QDEMSPH_HD Vec3 cross(Vec3 a, Vec3 b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
@@ -47,9 +57,15 @@ struct Mat3 {
   // Matrix whose columns are a, b, c.
   QDEMSPH_HD static Mat3 from_columns(Vec3 a, Vec3 b, Vec3 c) {
     Mat3 r;
-    r.m[0][0] = a.x; r.m[0][1] = b.x; r.m[0][2] = c.x;
-    r.m[1][0] = a.y; r.m[1][1] = b.y; r.m[1][2] = c.y;
-    r.m[2][0] = a.z; r.m[2][1] = b.z; r.m[2][2] = c.z;
+    r.m[0][0] = a.x;
+    r.m[0][1] = b.x;
+    r.m[0][2] = c.x;
+    r.m[1][0] = a.y;
+    r.m[1][1] = b.y;
+    r.m[1][2] = c.y;
+    r.m[2][0] = a.z;
+    r.m[2][1] = b.z;
+    r.m[2][2] = c.z;
     return r;
   }
   QDEMSPH_HD Vec3 col(int c) const { return {m[0][c], m[1][c], m[2][c]}; }

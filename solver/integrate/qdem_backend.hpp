@@ -70,7 +70,8 @@ class QdemBackend final : public Backend {
     std::vector<std::int64_t> ent(off[nv_]), fill(off.begin(), off.end() - 1);
     for (int k = 0; k < 4; ++k)
       for (std::int64_t t = 0; t < nft_; ++t) ent[fill[m.tets[t][k]]++] = k * nt_ + t;
-    for (std::int64_t i = 0; i < nv_; ++i) std::sort(ent.begin() + off[i], ent.begin() + off[i + 1]);
+    for (std::int64_t i = 0; i < nv_; ++i)
+      std::sort(ent.begin() + off[i], ent.begin() + off[i + 1]);
     csr_off_.assign(off);
     csr_ent_.assign(ent);
     flag_.resize(1);
@@ -99,21 +100,22 @@ class QdemBackend final : public Backend {
     const auto tf = tf_.view();
     const auto diss_t = diss_t_.view();
     unsigned long long* flag = flag_.view().p;
-    for_each(Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) {
-      Vec3 xs[4], vs[4];
-      for (int k = 0; k < 4; ++k) {
-        const std::int32_t i = tv[k * nt + t];
-        xs[k] = x[i];
-        vs[k] = v[i];
-      }
-      Mat3 Xi;
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) Xi.m[r][c] = dxi[(3 * r + c) * nt + t];
-      const ElementForces e = tet_forces(mats[tmat[t]], xs, vs, Xi, vol0[t]);
-      if (!(det(e.F) > 0)) raise_flag(flag, t);
-      for (int k = 0; k < 4; ++k) tf[k * nt + t] = e.f[k];
-      if (dt_diss > 0) diss_t[t] += dt_diss * vol0[t] * e.stress.dissipation;
-    });
+    for_each(
+        Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) {
+          Vec3 xs[4], vs[4];
+          for (int k = 0; k < 4; ++k) {
+            const std::int32_t i = tv[k * nt + t];
+            xs[k] = x[i];
+            vs[k] = v[i];
+          }
+          Mat3 Xi;
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) Xi.m[r][c] = dxi[(3 * r + c) * nt + t];
+          const ElementForces e = tet_forces(mats[tmat[t]], xs, vs, Xi, vol0[t]);
+          if (!(det(e.F) > 0)) raise_flag(flag, t);
+          for (int k = 0; k < 4; ++k) tf[k * nt + t] = e.f[k];
+          if (dt_diss > 0) diss_t[t] += dt_diss * vol0[t] * e.stress.dissipation;
+        });
     const auto off = csr_off_.cview();
     const auto ent = csr_ent_.cview();
     const auto fext = (preload_ ? fpre_ : fext_).cview();
@@ -121,16 +123,17 @@ class QdemBackend final : public Backend {
     const auto f = f_.view();
     const auto diss_v = diss_v_.view();
     const Vec3 g = gravity_;
-    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-      Vec3 s = fext[i] + mass[i] * g;
-      for (std::int64_t j = off[i]; j < off[i + 1]; ++j) s += tf[ent[j]];
-      if (alpha > 0) {
-        const Vec3 vi = v[i];
-        s -= (alpha * mass[i]) * vi;
-        if (dt_diss > 0) diss_v[i] += dt_diss * alpha * mass[i] * norm2(vi);
-      }
-      f.set(i, s);
-    });
+    for_each(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+          Vec3 s = fext[i] + mass[i] * g;
+          for (std::int64_t j = off[i]; j < off[i + 1]; ++j) s += tf[ent[j]];
+          if (alpha > 0) {
+            const Vec3 vi = v[i];
+            s -= (alpha * mass[i]) * vi;
+            if (dt_diss > 0) diss_v[i] += dt_diss * alpha * mass[i] * norm2(vi);
+          }
+          f.set(i, s);
+        });
     if constexpr (S == Space::Host)
       if (contact_) contact_->add_forces(x_.cview(), v_.cview(), f_.view(), dt_diss);
   }
@@ -157,15 +160,17 @@ class QdemBackend final : public Backend {
     const auto f = f_.cview();
     const auto im = inv_mass_.cview();
     const auto v = v_.view();
-    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-      if (im[i] > 0) v.set(i, v[i] + (h * im[i]) * f[i]);
-    });
+    for_each(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (im[i] > 0) v.set(i, v[i] + (h * im[i]) * f[i]);
+        });
   }
 
   void drift(double h) override {
     const auto v = v_.cview();
     const auto x = x_.view();
-    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { x.set(i, x[i] + h * v[i]); });
+    for_each(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { x.set(i, x[i] + h * v[i]); });
   }
 
   void damped_step(double dt, double c) override {
@@ -174,30 +179,33 @@ class QdemBackend final : public Backend {
     const auto v = v_.view();
     const auto x = x_.view();
     const double a = (1 - 0.5 * c * dt) / (1 + 0.5 * c * dt), b = dt / (1 + 0.5 * c * dt);
-    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-      if (im[i] > 0) {
-        const Vec3 vi = a * v[i] + (b * im[i]) * f[i];
-        v.set(i, vi);
-        x.set(i, x[i] + dt * vi);
-      }
-    });
+    for_each(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (im[i] > 0) {
+            const Vec3 vi = a * v[i] + (b * im[i]) * f[i];
+            v.set(i, vi);
+            x.set(i, x[i] + dt * vi);
+          }
+        });
   }
 
   void zero_velocity() override {
     const auto im = inv_mass_.cview();
     const auto v = v_.view();
-    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-      if (im[i] > 0) v.set(i, Vec3{});
-    });
+    for_each(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (im[i] > 0) v.set(i, Vec3{});
+        });
   }
 
   void mark_relax_start() override {
     const auto x = x_.cview(), f = f_.cview();
     const auto x0 = x0_.view(), f0 = f0_.view();
-    for_each(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-      x0.set(i, x[i]);
-      f0.set(i, f[i]);
-    });
+    for_each(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+          x0.set(i, x[i]);
+          f0.set(i, f[i]);
+        });
   }
 
   StaticStats static_stats() override {
@@ -205,14 +213,14 @@ class QdemBackend final : public Backend {
     const auto im = inv_mass_.cview(), rim = relax_inv_mass_.cview();
     StaticStats s;
     s.residual_max = reduce_max(
-        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return im[i] > 0 ? norm(f[i]) : 0.0; },
-        0.0);
-    s.rayleigh_num = reduce_sum(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-      return rim[i] > 0 ? dot(x[i] - x0[i], f0[i] - f[i]) : 0.0;
-    });
-    s.rayleigh_den = reduce_sum(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-      return rim[i] > 0 ? norm2(x[i] - x0[i]) / rim[i] : 0.0;
-    });
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return im[i] > 0 ? norm(f[i]) : 0.0; }, 0.0);
+    s.rayleigh_num = reduce_sum(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+          return rim[i] > 0 ? dot(x[i] - x0[i], f0[i] - f[i]) : 0.0;
+        });
+    s.rayleigh_den = reduce_sum(
+        Exec{}, nfv_,
+        QDEMSPH_LAMBDA(std::int64_t i) { return rim[i] > 0 ? norm2(x[i] - x0[i]) / rim[i] : 0.0; });
     return s;
   }
 
@@ -229,23 +237,25 @@ class QdemBackend final : public Backend {
     const auto diss_t = diss_t_.cview(), diss_v = diss_v_.cview();
     const Vec3 g = gravity_;
     Energies e;
-    e.kinetic = reduce_sum(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-      return 0.5 * mass[i] * norm2(v[i]);
-    });
-    e.potential = reduce_sum(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-      return -dot(mass[i] * g + fext[i], x[i] - X[i]);
-    });
-    e.strain = reduce_sum(Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) {
-      Vec3 xs[4];
-      for (int k = 0; k < 4; ++k) xs[k] = x[tv[k * nt + t]];
-      Mat3 Xi;
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) Xi.m[r][c] = dxi[(3 * r + c) * nt + t];
-      const Mat3 F = edge_matrix(xs) * Xi;
-      return vol0[t] * material_stress(mats[tmat[t]], F, Mat3{}).energy_density;
-    });
-    e.dissipated = reduce_sum(Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) { return diss_t[t]; }) +
-                   reduce_sum(Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return diss_v[i]; });
+    e.kinetic = reduce_sum(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return 0.5 * mass[i] * norm2(v[i]); });
+    e.potential = reduce_sum(
+        Exec{}, nfv_,
+        QDEMSPH_LAMBDA(std::int64_t i) { return -dot(mass[i] * g + fext[i], x[i] - X[i]); });
+    e.strain = reduce_sum(
+        Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) {
+          Vec3 xs[4];
+          for (int k = 0; k < 4; ++k) xs[k] = x[tv[k * nt + t]];
+          Mat3 Xi;
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) Xi.m[r][c] = dxi[(3 * r + c) * nt + t];
+          const Mat3 F = edge_matrix(xs) * Xi;
+          return vol0[t] * material_stress(mats[tmat[t]], F, Mat3{}).energy_density;
+        });
+    e.dissipated = reduce_sum(
+                       Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) { return diss_t[t]; }) +
+                   reduce_sum(
+                       Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return diss_v[i]; });
     return e;
   }
 
@@ -283,26 +293,27 @@ class QdemBackend final : public Backend {
     const auto vol0 = vol0_.cview();
     const auto tmat = tmat_.cview();
     const auto mats = mats_.cview();
-    for_each(Exec{}, nt_, QDEMSPH_LAMBDA(std::int64_t t) {
-      Vec3 xs[4], vs[4];
-      for (int k = 0; k < 4; ++k) {
-        xs[k] = x[tv[k * nt + t]];
-        vs[k] = v[tv[k * nt + t]];
-      }
-      Mat3 Xi;
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) Xi.m[r][c] = dxi[(3 * r + c) * nt + t];
-      const Material mat = mats[tmat[t]];
-      const ElementForces e = tet_forces(mat, xs, vs, Xi, vol0[t]);
-      const Mat3 s = cauchy_stress(mat, e.stress.P, e.F);
-      o[0 * nt + t] = s.m[0][0];
-      o[1 * nt + t] = s.m[1][1];
-      o[2 * nt + t] = s.m[2][2];
-      o[3 * nt + t] = s.m[1][2];
-      o[4 * nt + t] = s.m[0][2];
-      o[5 * nt + t] = s.m[0][1];
-      o[6 * nt + t] = von_mises(s);
-    });
+    for_each(
+        Exec{}, nt_, QDEMSPH_LAMBDA(std::int64_t t) {
+          Vec3 xs[4], vs[4];
+          for (int k = 0; k < 4; ++k) {
+            xs[k] = x[tv[k * nt + t]];
+            vs[k] = v[tv[k * nt + t]];
+          }
+          Mat3 Xi;
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) Xi.m[r][c] = dxi[(3 * r + c) * nt + t];
+          const Material mat = mats[tmat[t]];
+          const ElementForces e = tet_forces(mat, xs, vs, Xi, vol0[t]);
+          const Mat3 s = cauchy_stress(mat, e.stress.P, e.F);
+          o[0 * nt + t] = s.m[0][0];
+          o[1 * nt + t] = s.m[1][1];
+          o[2 * nt + t] = s.m[2][2];
+          o[3 * nt + t] = s.m[1][2];
+          o[4 * nt + t] = s.m[0][2];
+          o[5 * nt + t] = s.m[0][1];
+          o[6 * nt + t] = von_mises(s);
+        });
     const std::vector<double> hs = out.to_host();
     h.stress.resize(nt);
     h.von_mises.resize(nt);
@@ -317,9 +328,10 @@ class QdemBackend final : public Backend {
 
   std::size_t device_bytes() const override {
     return X_.bytes() + x_.bytes() + v_.bytes() + f_.bytes() + fext_.bytes() + fpre_.bytes() +
-           mass_.bytes() + inv_mass_.bytes() + relax_inv_mass_.bytes() + diss_v_.bytes() + tv_.bytes() + dxi_.bytes() +
-           vol0_.bytes() + tmat_.bytes() + tf_.bytes() + diss_t_.bytes() + csr_off_.bytes() +
-           csr_ent_.bytes() + (contact_ ? contact_->bytes() : 0);
+           mass_.bytes() + inv_mass_.bytes() + relax_inv_mass_.bytes() + diss_v_.bytes() +
+           tv_.bytes() + dxi_.bytes() + vol0_.bytes() + tmat_.bytes() + tf_.bytes() +
+           diss_t_.bytes() + csr_off_.bytes() + csr_ent_.bytes() +
+           (contact_ ? contact_->bytes() : 0);
   }
 
  private:
@@ -329,7 +341,8 @@ class QdemBackend final : public Backend {
   bool preload_ = false;
   Vec3Buffer X_{S}, x_{S}, v_{S}, f_{S}, fext_{S}, fpre_{S}, x0_{S}, f0_{S};
   Buffer<Vec3> tf_{S};
-  Buffer<double> mass_{S}, inv_mass_{S}, relax_inv_mass_{S}, diss_v_{S}, dxi_{S}, vol0_{S}, diss_t_{S};
+  Buffer<double> mass_{S}, inv_mass_{S}, relax_inv_mass_{S}, diss_v_{S}, dxi_{S}, vol0_{S},
+      diss_t_{S};
   Buffer<std::int32_t> tv_{S}, tmat_{S};
   Buffer<Material> mats_{S};
   Buffer<std::int64_t> csr_off_{S}, csr_ent_{S};

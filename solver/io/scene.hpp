@@ -26,12 +26,10 @@ struct MaterialSpec {
 // Axis-aligned selection of vertices: each present axis range must contain the coordinate.
 // Coordinates are reference (undeformed) positions.
 struct Region {
-  std::array<double, 2> range[3] = {{-std::numeric_limits<double>::infinity(),
-                                     std::numeric_limits<double>::infinity()},
-                                    {-std::numeric_limits<double>::infinity(),
-                                     std::numeric_limits<double>::infinity()},
-                                    {-std::numeric_limits<double>::infinity(),
-                                     std::numeric_limits<double>::infinity()}};
+  std::array<double, 2> range[3] = {
+      {-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()},
+      {-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()},
+      {-std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()}};
   bool contains(Vec3 p) const {
     for (int a = 0; a < 3; ++a)
       if (p[a] < range[a][0] || p[a] > range[a][1]) return false;
@@ -76,7 +74,7 @@ struct ConstraintSpec {
 struct LoadSpec {
   enum class Kind { Traction, Point } kind = Kind::Traction;
   int body = 0;
-  Region region;       // traction: surface triangles with all 3 vertices inside
+  Region region;           // traction: surface triangles with all 3 vertices inside
   Vec3 traction{0, 0, 0};  // force per reference area [Pa]
   Vec3 point{0, 0, 0};     // point: applied at the vertex nearest to this position
   Vec3 force{0, 0, 0};     // point: force [N]
@@ -93,8 +91,8 @@ struct ProbeSpec {
 struct RunSpec {
   RunMode mode = RunMode::Dynamic;
   double end_time = 1.0;
-  std::optional<double> dt;  // fixed dt; must not exceed the stability limit
-  double dt_safety = 0.5;    // dt = dt_safety * stability limit when dt is not given
+  std::optional<double> dt;        // fixed dt; must not exceed the stability limit
+  double dt_safety = 0.5;          // dt = dt_safety * stability limit when dt is not given
   double static_tolerance = 1e-8;  // max |residual force| / max |applied force|; the floor is
                                    // ~1e-9, set by round-off in absolute positions
   long static_max_steps = 1000000;
@@ -104,8 +102,8 @@ struct RunSpec {
 
 struct OutputSpec {
   std::filesystem::path dir = "out";  // relative to the working directory
-  double fields_every = 0;   // simulated seconds between field snapshots; 0: first and last only
-  double probes_every = 0;   // simulated seconds between probe rows; 0: every 100 steps
+  double fields_every = 0;  // simulated seconds between field snapshots; 0: first and last only
+  double probes_every = 0;  // simulated seconds between probe rows; 0: every 100 steps
 };
 
 // Weakly compressible SPH fluid (docs/scene-format.md, `fluid:`). Boxes are axis-aligned
@@ -117,18 +115,18 @@ struct FluidBoxSpec {
 
 struct FluidSpec {
   bool present = false;
-  double density = 1000;                // rho0 [kg/m^3]
-  std::optional<double> sound_speed;    // c0 [m/s]; absent: auto = 10 sqrt(2 |g| H)
+  double density = 1000;                      // rho0 [kg/m^3]
+  std::optional<double> sound_speed;          // c0 [m/s]; absent: auto = 10 sqrt(2 |g| H)
   std::string viscosity_type = "artificial";  // artificial (alpha) or laminar (nu [m^2/s])
   double viscosity = 0.01;
-  bool wall_viscosity = true;           // viscosity also between fluid and walls
-  double delta = 0.1;                   // delta-SPH density diffusion coefficient
-  double spacing = 0;                   // particle spacing dx [m]
-  double smoothing = 1.3;               // h / dx
-  bool hydrostatic_init = true;         // initial pressure rho0 g (H - depth) per block
-  std::vector<FluidBoxSpec> blocks;     // fluid
-  std::vector<FluidBoxSpec> tanks;      // open-top containers: walls around the inner box
-  std::vector<FluidBoxSpec> walls;      // solid boxes of wall particles
+  bool wall_viscosity = true;        // viscosity also between fluid and walls
+  double delta = 0.1;                // delta-SPH density diffusion coefficient
+  double spacing = 0;                // particle spacing dx [m]
+  double smoothing = 1.3;            // h / dx
+  bool hydrostatic_init = true;      // initial pressure rho0 g (H - depth) per block
+  std::vector<FluidBoxSpec> blocks;  // fluid
+  std::vector<FluidBoxSpec> tanks;   // open-top containers: walls around the inner box
+  std::vector<FluidBoxSpec> walls;   // solid boxes of wall particles
 };
 
 // Contact between bodies (docs/scene-format.md, `contact:`). Per material pair values
@@ -145,7 +143,7 @@ struct ContactSpec {
   bool self_contact = false;
   std::string broad_phase = "polygons";  // polygons | surface_tets | all_tets (report Fig. 7)
   double stiffness_factor = 0.5;         // default k_n = factor * E_pair * h_pair
-  std::optional<double> skin;            // pair-list Verlet skin [m]; absent: auto; 0: rebuild every step
+  std::optional<double> skin;  // pair-list Verlet skin [m]; absent: auto; 0: rebuild every step
   std::vector<ContactPairSpec> pairs;
 };
 

@@ -405,7 +405,8 @@ MeshSpec parse_mesh(const Context& ctx, const Field& f) {
     const MapView m(ctx, f, {"type", "piece", "mesh_size", "translate", "rotate"});
     mesh.kind = MeshSpec::Kind::Shogi;
     if (auto v = m.opt("piece"))
-      mesh.piece = v->choice({"king", "rook", "bishop", "gold", "silver", "knight", "lance", "pawn"});
+      mesh.piece =
+          v->choice({"king", "rook", "bishop", "gold", "silver", "knight", "lance", "pawn"});
     if (auto v = m.opt("mesh_size")) mesh.mesh_size = v->number(positive, "must be > 0");
     if (auto v = m.opt("translate")) mesh.translate = v->vec3();
     if (auto v = m.opt("rotate")) {
@@ -550,15 +551,16 @@ FluidBoxSpec parse_fluid_box(const Context& ctx, const Field& f, bool tank) {
   for (int a = 0; a < 3; ++a)
     if (!(b.max[a] > b.min[a])) mx.element(a).fail("must be > min");
   if (tank)
-    if (auto v = m.opt("thickness_layers")) b.thickness_layers = static_cast<int>(v->integer(1, 16));
+    if (auto v = m.opt("thickness_layers"))
+      b.thickness_layers = static_cast<int>(v->integer(1, 16));
   return b;
 }
 
 FluidSpec parse_fluid(const Context& ctx, const Field& f) {
-  const MapView m(ctx, f,
-                  {"density", "sound_speed", "viscosity", "viscosity_type", "wall_viscosity",
-                   "delta", "spacing", "smoothing", "hydrostatic_init", "blocks", "tanks",
-                   "walls"});
+  const MapView m(
+      ctx, f,
+      {"density", "sound_speed", "viscosity", "viscosity_type", "wall_viscosity", "delta",
+       "spacing", "smoothing", "hydrostatic_init", "blocks", "tanks", "walls"});
   FluidSpec fl;
   fl.present = true;
   if (auto v = m.opt("density")) fl.density = v->number(positive, "must be > 0");
@@ -569,10 +571,12 @@ FluidSpec parse_fluid(const Context& ctx, const Field& f) {
   if (auto v = m.opt("viscosity_type")) fl.viscosity_type = v->choice({"artificial", "laminar"});
   if (auto v = m.opt("viscosity")) fl.viscosity = v->number(non_negative, "must be >= 0");
   if (auto v = m.opt("wall_viscosity")) fl.wall_viscosity = v->boolean();
-  if (auto v = m.opt("delta")) fl.delta = v->number([](double x) { return x >= 0 && x <= 1; }, "must be in [0, 1]");
+  if (auto v = m.opt("delta"))
+    fl.delta = v->number([](double x) { return x >= 0 && x <= 1; }, "must be in [0, 1]");
   fl.spacing = m.req("spacing").number(positive, "must be > 0");
   if (auto v = m.opt("smoothing"))
-    fl.smoothing = v->number([](double x) { return x >= 1 && x <= 3; }, "must be in [1, 3] (h / spacing)");
+    fl.smoothing =
+        v->number([](double x) { return x >= 1 && x <= 3; }, "must be in [1, 3] (h / spacing)");
   if (auto v = m.opt("hydrostatic_init")) fl.hydrostatic_init = v->boolean();
   const Field blocks = m.req("blocks");
   for (const auto& bf : blocks.list()) fl.blocks.push_back(parse_fluid_box(ctx, bf, false));
@@ -588,15 +592,18 @@ double restitution(const Field& f) {
   return f.number([](double x) { return x > 0 && x <= 1; }, "must be in (0, 1]");
 }
 
-ContactSpec parse_contact(const Context& ctx, const Field& f, const std::vector<MaterialSpec>& mats) {
-  const MapView m(ctx, f, {"mu", "restitution", "d_dem", "self_contact", "broad_phase",
-                           "stiffness_factor", "skin", "pairs"});
+ContactSpec parse_contact(const Context& ctx, const Field& f,
+                          const std::vector<MaterialSpec>& mats) {
+  const MapView m(ctx, f,
+                  {"mu", "restitution", "d_dem", "self_contact", "broad_phase", "stiffness_factor",
+                   "skin", "pairs"});
   ContactSpec c;
   if (auto v = m.opt("mu")) c.mu = v->number(non_negative, "must be >= 0");
   if (auto v = m.opt("restitution")) c.restitution = restitution(*v);
   if (auto v = m.opt("d_dem")) c.d_dem = v->number(positive, "must be > 0");
   if (auto v = m.opt("self_contact")) c.self_contact = v->boolean();
-  if (auto v = m.opt("broad_phase")) c.broad_phase = v->choice({"polygons", "surface_tets", "all_tets"});
+  if (auto v = m.opt("broad_phase"))
+    c.broad_phase = v->choice({"polygons", "surface_tets", "all_tets"});
   if (auto v = m.opt("stiffness_factor")) c.stiffness_factor = v->number(positive, "must be > 0");
   if (auto v = m.opt("skin")) c.skin = v->number(non_negative, "must be >= 0 [m]");
   if (auto v = m.opt("pairs")) {
@@ -663,8 +670,9 @@ Scene build_scene(const Context& ctx, const YAML::Node& root, const fs::path& fi
   // A fluid-only scene needs no materials or bodies.
   if (auto v = m.opt("fluid")) s.fluid = parse_fluid(ctx, *v);
   const bool fluid_only = s.fluid.present && !m.has("bodies");
-  const Field mats = fluid_only && !m.has("materials") ? Field(ctx, YAML::Node(YAML::NodeType::Map), "materials")
-                                                       : m.req("materials");
+  const Field mats = fluid_only && !m.has("materials")
+                         ? Field(ctx, YAML::Node(YAML::NodeType::Map), "materials")
+                         : m.req("materials");
   if (!mats.node().IsMap()) mats.fail("expected a mapping of material names to materials");
   for (const auto& kv : mats.node()) {
     const std::string name = kv.first.IsScalar() ? kv.first.Scalar() : "";
@@ -676,8 +684,8 @@ Scene build_scene(const Context& ctx, const YAML::Node& root, const fs::path& fi
   }
   if (s.materials.empty() && !fluid_only) mats.fail("at least one material is required", false);
 
-  const Field bodies = fluid_only ? Field(ctx, YAML::Node(YAML::NodeType::Sequence), "bodies")
-                                  : m.req("bodies");
+  const Field bodies =
+      fluid_only ? Field(ctx, YAML::Node(YAML::NodeType::Sequence), "bodies") : m.req("bodies");
   const std::vector<Field> body_fields = bodies.list();
   if (body_fields.empty() && !fluid_only) bodies.fail("at least one body is required");
   for (const auto& bf : body_fields) {

@@ -47,11 +47,13 @@ std::string describe(const Region& r) {
   const char* ax = "xyz";
   for (int a = 0; a < 3; ++a)
     if (std::isfinite(r.range[a][0]) || std::isfinite(r.range[a][1]))
-      s += fmt::format("{}{}: [{}, {}]", s.empty() ? "" : ", ", ax[a], r.range[a][0], r.range[a][1]);
+      s +=
+          fmt::format("{}{}: [{}, {}]", s.empty() ? "" : ", ", ax[a], r.range[a][0], r.range[a][1]);
   return "{" + s + "}";
 }
 
-bool all_inside(const Region& r, const std::vector<Vec3>& X, const std::array<std::int32_t, 3>& tri) {
+bool all_inside(const Region& r, const std::vector<Vec3>& X,
+                const std::array<std::int32_t, 3>& tri) {
   return r.contains(X[tri[0]]) && r.contains(X[tri[1]]) && r.contains(X[tri[2]]);
 }
 
@@ -83,14 +85,13 @@ Model build_model(const Scene& scene) {
   model.gravity = scene.gravity;
   model.mass_damping = scene.mass_damping;
   for (const auto& m : scene.materials)
-    model.materials.push_back(make_material(m.law == MaterialLaw::Linear ? 0 : 1, m.E, m.nu,
-                                            m.density, m.viscosity));
+    model.materials.push_back(
+        make_material(m.law == MaterialLaw::Linear ? 0 : 1, m.E, m.nu, m.density, m.viscosity));
 
   // Free bodies first, fixed bodies last (stable within each group).
   std::vector<int> order(scene.bodies.size());
   std::iota(order.begin(), order.end(), 0);
-  std::stable_partition(order.begin(), order.end(),
-                        [&](int i) { return !scene.bodies[i].fixed; });
+  std::stable_partition(order.begin(), order.end(), [&](int i) { return !scene.bodies[i].fixed; });
   std::vector<int> body_slot(scene.bodies.size());
   std::vector<std::uint8_t> tet_is_surface;  // per global tet (edge rule), for contact
 
@@ -147,11 +148,13 @@ Model build_model(const Scene& scene) {
     com = com / mtot;
     for (std::size_t i = 0; i < mesh.points.size(); ++i) {
       if (mass[i] == 0)
-        throw InputError(fmt::format("body '{}': vertex {} belongs to no tetrahedron", spec.name, i));
+        throw InputError(
+            fmt::format("body '{}': vertex {} belongs to no tetrahedron", spec.name, i));
       const Vec3 p = mesh.points[i];
       model.X.push_back(p);
       model.x.push_back(p);
-      model.v.push_back(spec.fixed ? Vec3{} : spec.velocity + cross(spec.angular_velocity, p - com));
+      model.v.push_back(spec.fixed ? Vec3{}
+                                   : spec.velocity + cross(spec.angular_velocity, p - com));
       model.mass.push_back(mass[i]);
       model.inv_mass.push_back(spec.fixed ? 0.0 : 1.0 / mass[i]);
       model.flags.push_back(spec.fixed ? kFixed : 0);
@@ -159,7 +162,8 @@ Model build_model(const Scene& scene) {
       model.body.push_back(body_slot[bi]);
     }
     const SurfaceInfo surf = analyse_surface(mesh);
-    tet_is_surface.insert(tet_is_surface.end(), surf.tet_is_surface.begin(), surf.tet_is_surface.end());
+    tet_is_surface.insert(tet_is_surface.end(), surf.tet_is_surface.begin(),
+                          surf.tet_is_surface.end());
     for (const auto& tri : surf.triangles) {
       SurfaceTriangle g = tri;
       for (auto& v : g.v) v += voff;

@@ -13,9 +13,12 @@ namespace qdemsph {
 
 const char* broad_phase_name(BroadPhase b) {
   switch (b) {
-    case BroadPhase::AllTets: return "all_tets";
-    case BroadPhase::SurfaceTets: return "surface_tets";
-    default: return "polygons";
+    case BroadPhase::AllTets:
+      return "all_tets";
+    case BroadPhase::SurfaceTets:
+      return "surface_tets";
+    default:
+      return "polygons";
   }
 }
 
@@ -151,7 +154,8 @@ void build_contact_model(const Scene& scene, Model& model,
     }
   for (const auto& p : scene.contact.pairs)
     for (int k = 0; k < 2; ++k) {
-      const int i = (k == 0 ? p.material_a : p.material_b) * nm + (k == 0 ? p.material_b : p.material_a);
+      const int i =
+          (k == 0 ? p.material_a : p.material_b) * nm + (k == 0 ? p.material_b : p.material_a);
       if (p.mu) c.pair_mu[i] = *p.mu;
       if (p.restitution) c.pair_zeta[i] = damping_ratio_from_restitution(*p.restitution);
       if (p.stiffness) c.pair_kn[i] = *p.stiffness;
@@ -171,7 +175,8 @@ void build_contact_model(const Scene& scene, Model& model,
   double dt = std::numeric_limits<double>::infinity();
   std::vector<double> mmin(nb, std::numeric_limits<double>::infinity());
   for (std::int64_t i = 0; i < model.n_free_vertices; ++i)
-    if (v_owner[i] >= 0 && model.inv_mass[i] > 0) mmin[model.body[i]] = std::min(mmin[model.body[i]], model.mass[i]);
+    if (v_owner[i] >= 0 && model.inv_mass[i] > 0)
+      mmin[model.body[i]] = std::min(mmin[model.body[i]], model.mass[i]);
   double kmax = 0;
   for (double k : c.pair_kn) kmax = std::max(kmax, k);
   for (const auto& w : c.walls) kmax = std::max(kmax, w.stiffness);

@@ -35,19 +35,19 @@ struct ContactWall {
 struct ContactModel {
   bool enabled = false;
   BroadPhase mode = BroadPhase::Polygons;
-  double d_dem = 0;          // virtual DEM particle diameter [m]
+  double d_dem = 0;  // virtual DEM particle diameter [m]
   bool self_contact = false;
-  double kn_factor = 0.5;    // default k_n = kn_factor * E_pair * h_pair
+  double kn_factor = 0.5;  // default k_n = kn_factor * E_pair * h_pair
   double kt_ratio = 2.0 / 7.0;
-  double skin = -1;          // pair-list Verlet skin [m]; < 0: auto (D_DEM + max r / 4)
+  double skin = -1;  // pair-list Verlet skin [m]; < 0: auto (D_DEM + max r / 4)
 
   // Surface triangles (global vertex ids), owning body; unique edges; ownership CSR.
   std::vector<std::array<std::int32_t, 3>> tri_v;
   std::vector<std::int32_t> tri_body;
-  std::vector<std::array<std::int32_t, 2>> edges;  // (a, b), a < b, sorted
+  std::vector<std::array<std::int32_t, 2>> edges;     // (a, b), a < b, sorted
   std::vector<std::array<std::int32_t, 2>> edge_tri;  // the edge's two triangles (-1: none)
-  std::vector<std::int64_t> own_v_off, own_e_off;  // size n_tri + 1
-  std::vector<std::int32_t> own_v, own_e;          // vertex ids / edge ids
+  std::vector<std::int64_t> own_v_off, own_e_off;     // size n_tri + 1
+  std::vector<std::int32_t> own_v, own_e;             // vertex ids / edge ids
 
   // Primitives of the broad phase: up to 4 vertices (-1 padded), body, owned triangles.
   std::vector<std::array<std::int32_t, 4>> prim_v;
@@ -60,7 +60,7 @@ struct ContactModel {
   std::vector<ContactWall> walls;
 
   // Per body and per material pair (n_mat x n_mat, symmetric).
-  std::vector<double> body_h;        // mean surface edge length [m]
+  std::vector<double> body_h;  // mean surface edge length [m]
   std::vector<std::uint8_t> body_fixed;
   std::vector<std::int32_t> body_mat;
   int n_mat = 0;

@@ -32,10 +32,10 @@ struct BodyRange {
 
 struct Model {
   // Vertices.
-  std::vector<Vec3> X;      // reference positions
-  std::vector<Vec3> x, v;   // initial state
-  std::vector<Vec3> fext;   // dead loads applied during the run [N]
-  std::vector<Vec3> fpre;   // dead loads of the initial static solve only (preload)
+  std::vector<Vec3> X;                 // reference positions
+  std::vector<Vec3> x, v;              // initial state
+  std::vector<Vec3> fext;              // dead loads applied during the run [N]
+  std::vector<Vec3> fpre;              // dead loads of the initial static solve only (preload)
   std::vector<double> mass, inv_mass;  // inv_mass = 0 on fixed and prescribed vertices
   std::vector<std::uint8_t> flags;
   std::vector<std::uint64_t> gid;
@@ -64,7 +64,7 @@ struct Model {
   std::vector<double> relax_inv_mass;
   double relax_dt = 0;
 
-  double dt_critical = 0;          // stability limit over free tets (and contact springs)
+  double dt_critical = 0;  // stability limit over free tets (and contact springs)
   std::int64_t dt_critical_tet = -1;
 
   std::int64_t n_vertices() const { return static_cast<std::int64_t>(X.size()); }

@@ -77,11 +77,11 @@ inline void counting_sort_host(const std::vector<std::int64_t>& keys, std::int64
                                std::vector<std::int64_t>& start, std::vector<std::int64_t>& order) {
   const std::int64_t n = static_cast<std::int64_t>(keys.size());
   start.assign(ncells + 1, 0);
-  for (std::int64_t i = 0; i < n; ++i) ++start[keys[i] + 1];          // count
+  for (std::int64_t i = 0; i < n; ++i) ++start[keys[i] + 1];           // count
   for (std::int64_t c = 0; c < ncells; ++c) start[c + 1] += start[c];  // exclusive scan
   std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
   order.resize(n);
-  for (std::int64_t i = 0; i < n; ++i) order[fill[keys[i]]++] = i;     // fill
+  for (std::int64_t i = 0; i < n; ++i) order[fill[keys[i]]++] = i;  // fill
 }
 
 // Cell list over a Vec3 field in memory space S: keys on the device, sort on the host.
@@ -101,7 +101,8 @@ class CellList {
     if (keys_.size() != n) keys_.resize(n);
     const auto k = keys_.view();
     const CellGrid g = grid_;
-    for_each(Exec{}, n, QDEMSPH_LAMBDA(std::int64_t i) { k[i] = g.key_of(x[i]); });
+    for_each(
+        Exec{}, n, QDEMSPH_LAMBDA(std::int64_t i) { k[i] = g.key_of(x[i]); });
     const std::vector<std::int64_t> hk = keys_.to_host();
     counting_sort_host(hk, grid_.count(), hstart_, horder_);
     start_.assign(hstart_);

@@ -53,11 +53,13 @@ class CandidatePairs {
       });
       return k;
     };
-    for_each(Exec{}, n, QDEMSPH_LAMBDA(std::int64_t i) { start[i] = visit(i, nullptr); });
+    for_each(
+        Exec{}, n, QDEMSPH_LAMBDA(std::int64_t i) { start[i] = visit(i, nullptr); });
     const std::int64_t total = exclusive_scan(Exec{}, start, n);
     if (second_.size() < total) second_.resize(total + total / 4 + 16);
     const auto second = second_.view();
-    for_each(Exec{}, n, QDEMSPH_LAMBDA(std::int64_t i) { visit(i, second.p + start[i]); });
+    for_each(
+        Exec{}, n, QDEMSPH_LAMBDA(std::int64_t i) { visit(i, second.p + start[i]); });
     n_ = n;
     total_ = total;
     return total;

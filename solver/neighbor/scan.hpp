@@ -19,8 +19,8 @@ QDEMSPH_HD int atomic_inc(int* p) {
 #endif
 }
 
-// In place exclusive prefix sum (serial on the host: deterministic) of c[0..n); returns the total. c must have n + 1 entries:
-// c[n] receives the total too, so c is a CSR offset array afterwards.
+// In place exclusive prefix sum (serial on the host: deterministic) of c[0..n); returns the total.
+// c must have n + 1 entries: c[n] receives the total too, so c is a CSR offset array afterwards.
 template <class T>
 std::int64_t exclusive_scan(HostExec, View<T> c, std::int64_t n) {
   std::int64_t s = 0;

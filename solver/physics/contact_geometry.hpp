@@ -24,15 +24,15 @@
 
 namespace qdemsph {
 
-inline constexpr double kParallelSin = 1e-3;  // edge pairs closer to parallel are skipped
+inline constexpr double kParallelSin = 1e-3;   // edge pairs closer to parallel are skipped
 inline constexpr double kEdgeInterior = 1e-6;  // closest point must be this far from an end
 
 struct PointFace {
-  bool inside = false;  // projection falls inside the (non-degenerate) triangle
-  double s = 0;         // signed distance of A above the plane (along n)
+  bool inside = false;      // projection falls inside the (non-degenerate) triangle
+  double s = 0;             // signed distance of A above the plane (along n)
   double w[3] = {0, 0, 0};  // barycentric (area-ratio) weights of V0, V1, V2
-  Vec3 n;               // unit outward normal of the triangle
-  Vec3 c;               // closest point on the plane, sum w_i V_i
+  Vec3 n;                   // unit outward normal of the triangle
+  Vec3 c;                   // closest point on the plane, sum w_i V_i
 };
 
 QDEMSPH_HD PointFace point_face(Vec3 a, Vec3 v0, Vec3 v1, Vec3 v2) {
@@ -57,11 +57,11 @@ QDEMSPH_HD PointFace point_face(Vec3 a, Vec3 v0, Vec3 v1, Vec3 v2) {
 }
 
 struct EdgeEdge {
-  bool valid = false;  // non-parallel, closest points strictly inside both segments
-  double s = 0, t = 0; // segment parameters of the closest points
-  double d = 0;        // signed distance along n: (P - Q) . n
-  Vec3 n;              // unit normal, from edge 2's body towards edge 1's body
-  Vec3 p, q;           // closest points on edge 1 and edge 2
+  bool valid = false;   // non-parallel, closest points strictly inside both segments
+  double s = 0, t = 0;  // segment parameters of the closest points
+  double d = 0;         // signed distance along n: (P - Q) . n
+  Vec3 n;               // unit normal, from edge 2's body towards edge 1's body
+  Vec3 p, q;            // closest points on edge 1 and edge 2
 };
 
 // out1, out2: outward normals of edge 1 and edge 2 (sum of the adjacent faces' unit normals).

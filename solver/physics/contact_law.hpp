@@ -34,9 +34,9 @@ QDEMSPH_HD double damping_ratio_from_restitution(double e) {
 }
 
 struct ContactForce {
-  Vec3 f;        // on side 1
-  Vec3 xi;       // updated tangential spring
-  double fn = 0; // normal force magnitude
+  Vec3 f;         // on side 1
+  Vec3 xi;        // updated tangential spring
+  double fn = 0;  // normal force magnitude
 };
 
 QDEMSPH_HD ContactForce contact_force(const ContactLaw& law, Vec3 n, double delta, Vec3 v_rel,

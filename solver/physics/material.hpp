@@ -27,8 +27,7 @@ struct Material {
   double visc_ratio = 0;  // eta / E [s]
 };
 
-QDEMSPH_HD Material make_material(int law, double E, double nu, double density,
-                                  double viscosity) {
+QDEMSPH_HD Material make_material(int law, double E, double nu, double density, double viscosity) {
   Material m;
   m.law = law;
   m.lambda = E * nu / ((1 + nu) * (1 - 2 * nu));

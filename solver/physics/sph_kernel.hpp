@@ -17,9 +17,9 @@
 namespace qdemsph {
 
 struct WendlandC2 {
-  double h = 1;       // smoothing length [m]
-  double inv_h = 1;   // 1/h
-  double aD = 0;      // 21 / (16 pi h^3)
+  double h = 1;         // smoothing length [m]
+  double inv_h = 1;     // 1/h
+  double aD = 0;        // 21 / (16 pi h^3)
   double support2 = 4;  // (2h)^2
 
   static WendlandC2 make(double h) {

@@ -31,9 +31,9 @@ struct SphParams {
   WendlandC2 kernel;
   TaitEos eos;
   SphViscosity visc_type = SphViscosity::Artificial;
-  double alpha = 0.01;   // artificial viscosity coefficient
-  double nu = 0;         // laminar kinematic viscosity [m^2/s]
-  double delta = 0.1;    // density diffusion coefficient (0: off)
+  double alpha = 0.01;         // artificial viscosity coefficient
+  double nu = 0;               // laminar kinematic viscosity [m^2/s]
+  double delta = 0.1;          // density diffusion coefficient (0: off)
   bool wall_viscosity = true;  // viscosity also between fluid and wall (no-slip-like)
   Vec3 gravity{0, 0, 0};
 };
@@ -89,8 +89,8 @@ QDEMSPH_HD double sph_density_diffusion(const SphParams& P, const PairState& a,
   const double drho_h = P.eos.rho0 * dot(P.gravity, b.x - a.x) / (c0 * c0);
   const double eta2 = 0.01 * P.kernel.h * P.kernel.h;
   // (x_j - x_i) . grad_i W = -r^2 F >= 0
-  return P.delta * P.kernel.h * c0 * (b.m / b.rho) * 2.0 * (b.rho - a.rho - drho_h) *
-         (-r2 * F) / (r2 + eta2);
+  return P.delta * P.kernel.h * c0 * (b.m / b.rho) * 2.0 * (b.rho - a.rho - drho_h) * (-r2 * F) /
+         (r2 + eta2);
 }
 
 }  // namespace qdemsph

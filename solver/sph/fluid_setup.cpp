@@ -13,7 +13,8 @@ namespace {
 // Lattice counts along each axis for [lo, hi] with pitch dx (at least one).
 std::array<int, 3> lattice(Vec3 lo, Vec3 hi, double dx) {
   std::array<int, 3> n{};
-  for (int a = 0; a < 3; ++a) n[a] = std::max(1, static_cast<int>(std::lround((hi[a] - lo[a]) / dx)));
+  for (int a = 0; a < 3; ++a)
+    n[a] = std::max(1, static_cast<int>(std::lround((hi[a] - lo[a]) / dx)));
   return n;
 }
 
@@ -38,8 +39,7 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
   const double rho0 = spec.density;
   const double mass = rho0 * dx * dx * dx;
 
-  for (const auto& b : spec.blocks)
-    f.height = std::max(f.height, b.max[up] - b.min[up]);
+  for (const auto& b : spec.blocks) f.height = std::max(f.height, b.max[up] - b.min[up]);
   double c0 = 0;
   if (spec.sound_speed) {
     c0 = *spec.sound_speed;
@@ -80,7 +80,8 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
     for (int k = 0; k < n[2]; ++k)
       for (int j = 0; j < n[1]; ++j)
         for (int i = 0; i < n[0]; ++i) {
-          const Vec3 x{b.min.x + (i + 0.5) * dx, b.min.y + (j + 0.5) * dx, b.min.z + (k + 0.5) * dx};
+          const Vec3 x{b.min.x + (i + 0.5) * dx, b.min.y + (j + 0.5) * dx,
+                       b.min.z + (k + 0.5) * dx};
           const double depth = top - up_sign * x[up];
           add(x, kSphFluid, spec.hydrostatic_init ? rho0 * gmag * depth : 0.0);
         }
@@ -98,7 +99,10 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
       lo[a] = -L;
       hi[a] = n[a] + L;
     }
-    if (up_sign > 0) hi[up] = n[up]; else lo[up] = 0;
+    if (up_sign > 0)
+      hi[up] = n[up];
+    else
+      lo[up] = 0;
     for (int k = lo[2]; k < hi[2]; ++k)
       for (int j = lo[1]; j < hi[1]; ++j)
         for (int i = lo[0]; i < hi[0]; ++i) {
@@ -138,8 +142,8 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
 
 std::string describe_fluid(const FluidSetup& f) {
   return fmt::format(
-      "SPH ({} fluid + {} wall particles, dx = {:.4g} m, h = {:.4g} m, c0 = {:.4g} m/s)",
-      f.n_fluid, f.n_wall, f.dx, f.params.kernel.h, f.params.eos.c0);
+      "SPH ({} fluid + {} wall particles, dx = {:.4g} m, h = {:.4g} m, c0 = {:.4g} m/s)", f.n_fluid,
+      f.n_wall, f.dx, f.params.kernel.h, f.params.eos.c0);
 }
 
 }  // namespace qdemsph

@@ -17,9 +17,9 @@ enum SphType : std::uint8_t { kSphFluid = 0, kSphWall = 1 };
 
 struct FluidSetup {
   SphParams params;
-  double dx = 0;         // particle spacing
-  double height = 0;     // largest fluid block height along gravity (for auto c0)
-  Vec3 lo{}, hi{};       // box the neighbour grid covers (all particles plus a margin)
+  double dx = 0;      // particle spacing
+  double height = 0;  // largest fluid block height along gravity (for auto c0)
+  Vec3 lo{}, hi{};    // box the neighbour grid covers (all particles plus a margin)
   std::vector<Vec3> x, v;
   std::vector<double> rho, p, m;
   std::vector<std::uint8_t> type;

@@ -28,11 +28,11 @@ struct FluidHost {
 };
 
 struct FluidStats {
-  double kinetic = 0;    // sum 1/2 m v^2 over fluid [J]
-  Vec3 momentum{};       // sum m v over fluid [kg m/s]
-  double v_max = 0;      // max |v| [m/s]
-  double a_max = 0;      // max |a| [m/s^2]
-  double rho_dev = 0;    // max |rho / rho0 - 1| over fluid
+  double kinetic = 0;  // sum 1/2 m v^2 over fluid [J]
+  Vec3 momentum{};     // sum m v over fluid [kg m/s]
+  double v_max = 0;    // max |v| [m/s]
+  double a_max = 0;    // max |a| [m/s^2]
+  double rho_dev = 0;  // max |rho / rho0 - 1| over fluid
 };
 
 class FluidStage {

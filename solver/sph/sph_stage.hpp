@@ -70,18 +70,20 @@ class SphStage final : public FluidStage {
     const auto a = a_.cview();
     const auto type = type_.cview();
     const auto v = v_.view();
-    for_each(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-      if (type[i] == kSphFluid) v.set(i, v[i] + h * a[i]);
-    });
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (type[i] == kSphFluid) v.set(i, v[i] + h * a[i]);
+        });
   }
 
   void drift(double h) override {
     const auto v = v_.cview();
     const auto type = type_.cview();
     const auto x = x_.view();
-    for_each(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-      if (type[i] == kSphFluid) x.set(i, x[i] + h * v[i]);
-    });
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (type[i] == kSphFluid) x.set(i, x[i] + h * v[i]);
+        });
     pending_dt_ += h;
   }
 
@@ -102,60 +104,64 @@ class SphStage final : public FluidStage {
     // (a density lagging half a step behind the positions makes the acoustic modes grow).
     const double ddt = pending_dt_;
     pending_dt_ = 0;
-    for_each(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-      if (type[i] != kSphFluid) {
-        drho[i] = 0.0;
-        return;
-      }
-      const PairState si{x[i], v[i], rho[i], 0.0, m[i]};
-      double dr = 0;
-      const double s2 = P.kernel.support2;
-      sph_for_each_near(g, start, si.x, false, [&](std::int64_t j) {
-        const Vec3 xj = x[j];
-        if (j == i || norm2(si.x - xj) >= s2) return;  // most candidates: no further loads
-        const PairState sj{xj, v[j], rho[j], 0.0, m[j]};
-        dr += sph_continuity(P, si, sj);
-        if (type[j] == kSphFluid) dr += sph_density_diffusion(P, si, sj);
-      });
-      drho[i] = dr;
-    });
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (type[i] != kSphFluid) {
+            drho[i] = 0.0;
+            return;
+          }
+          const PairState si{x[i], v[i], rho[i], 0.0, m[i]};
+          double dr = 0;
+          const double s2 = P.kernel.support2;
+          sph_for_each_near(g, start, si.x, false, [&](std::int64_t j) {
+            const Vec3 xj = x[j];
+            if (j == i || norm2(si.x - xj) >= s2) return;  // most candidates: no further loads
+            const PairState sj{xj, v[j], rho[j], 0.0, m[j]};
+            dr += sph_continuity(P, si, sj);
+            if (type[j] == kSphFluid) dr += sph_density_diffusion(P, si, sj);
+          });
+          drho[i] = dr;
+        });
     // Equation of state (fluid). Walls keep the density Adami gives them below.
-    for_each(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-      if (type[i] != kSphFluid) return;
-      rho[i] += ddt * drho[i];
-      p[i] = P.eos.pressure(rho[i]);
-    });
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (type[i] != kSphFluid) return;
+          rho[i] += ddt * drho[i];
+          p[i] = P.eos.pressure(rho[i]);
+        });
     // Wall pressure and density by extrapolation from the fluid (fixed walls: a_w = 0).
-    for_each(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-      if (type[i] == kSphFluid) return;
-      const Vec3 xi = x[i];
-      AdamiSum s;
-      sph_for_each_near(g, start, xi, true, [&](std::int64_t j) {
-        adami_add(s, P.kernel, xi, x[j], p[j], rho[j]);
-      });
-      const double pw = adami_pressure(s, P.gravity, Vec3{});
-      p[i] = pw;
-      rho[i] = P.eos.density(pw);
-      m[i] = rho[i] * wall_volume;  // a wall particle keeps its volume dx^3
-    });
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (type[i] == kSphFluid) return;
+          const Vec3 xi = x[i];
+          AdamiSum s;
+          sph_for_each_near(g, start, xi, true, [&](std::int64_t j) {
+            adami_add(s, P.kernel, xi, x[j], p[j], rho[j]);
+          });
+          const double pw = adami_pressure(s, P.gravity, Vec3{});
+          p[i] = pw;
+          rho[i] = P.eos.density(pw);
+          m[i] = rho[i] * wall_volume;  // a wall particle keeps its volume dx^3
+        });
     // Pair sums: acceleration of fluid particles.
     const auto a = a_.view();
-    for_each(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-      if (type[i] != kSphFluid) {
-        a.set(i, Vec3{});
-        return;
-      }
-      const PairState si{x[i], v[i], rho[i], p[i], m[i]};
-      Vec3 f{};
-      const double s2 = P.kernel.support2;
-      sph_for_each_near(g, start, si.x, false, [&](std::int64_t j) {
-        const Vec3 xj = x[j];
-        if (j == i || norm2(si.x - xj) >= s2) return;
-        const PairState sj{xj, v[j], rho[j], p[j], m[j]};
-        f += sph_pair_force(P, si, sj, type[j] == kSphFluid || P.wall_viscosity);
-      });
-      a.set(i, P.gravity + f / si.m);
-    });
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (type[i] != kSphFluid) {
+            a.set(i, Vec3{});
+            return;
+          }
+          const PairState si{x[i], v[i], rho[i], p[i], m[i]};
+          Vec3 f{};
+          const double s2 = P.kernel.support2;
+          sph_for_each_near(g, start, si.x, false, [&](std::int64_t j) {
+            const Vec3 xj = x[j];
+            if (j == i || norm2(si.x - xj) >= s2) return;
+            const PairState sj{xj, v[j], rho[j], p[j], m[j]};
+            f += sph_pair_force(P, si, sj, type[j] == kSphFluid || P.wall_viscosity);
+          });
+          a.set(i, P.gravity + f / si.m);
+        });
   }
 
   FluidStats stats() override {
@@ -164,22 +170,26 @@ class SphStage final : public FluidStage {
     const auto type = type_.cview();
     const double rho0 = P_.eos.rho0;
     FluidStats s;
-    s.kinetic = reduce_sum(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-      return type[i] == kSphFluid ? 0.5 * m[i] * norm2(v[i]) : 0.0;
-    });
+    s.kinetic = reduce_sum(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
+          return type[i] == kSphFluid ? 0.5 * m[i] * norm2(v[i]) : 0.0;
+        });
     for (int c = 0; c < 3; ++c)
-      s.momentum[c] = reduce_sum(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-        return type[i] == kSphFluid ? m[i] * v[i][c] : 0.0;
-      });
-    s.v_max = reduce_max(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-      return type[i] == kSphFluid ? norm(v[i]) : 0.0;
-    }, 0.0);
-    s.a_max = reduce_max(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-      return type[i] == kSphFluid ? norm(a[i]) : 0.0;
-    }, 0.0);
-    s.rho_dev = reduce_max(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-      return type[i] == kSphFluid ? fabs(rho[i] / rho0 - 1.0) : 0.0;
-    }, 0.0);
+      s.momentum[c] = reduce_sum(
+          Exec{}, n_,
+          QDEMSPH_LAMBDA(std::int64_t i) { return type[i] == kSphFluid ? m[i] * v[i][c] : 0.0; });
+    s.v_max = reduce_max(
+        Exec{}, n_,
+        QDEMSPH_LAMBDA(std::int64_t i) { return type[i] == kSphFluid ? norm(v[i]) : 0.0; }, 0.0);
+    s.a_max = reduce_max(
+        Exec{}, n_,
+        QDEMSPH_LAMBDA(std::int64_t i) { return type[i] == kSphFluid ? norm(a[i]) : 0.0; }, 0.0);
+    s.rho_dev = reduce_max(
+        Exec{}, n_,
+        QDEMSPH_LAMBDA(std::int64_t i) {
+          return type[i] == kSphFluid ? fabs(rho[i] / rho0 - 1.0) : 0.0;
+        },
+        0.0);
     return s;
   }
 
@@ -193,10 +203,13 @@ class SphStage final : public FluidStage {
     const auto x = x_.cview(), v = v_.cview();
     const auto rho = rho_.cview();
     const auto gid = gid_.cview();
-    const double r = reduce_max(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-      const double s = x.x[i] + x.y[i] + x.z[i] + v.x[i] + v.y[i] + v.z[i] + rho[i];
-      return is_finite(s) ? 0.0 : static_cast<double>(gid[i] + 1);
-    }, 0.0);
+    const double r = reduce_max(
+        Exec{}, n_,
+        QDEMSPH_LAMBDA(std::int64_t i) {
+          const double s = x.x[i] + x.y[i] + x.z[i] + v.x[i] + v.y[i] + v.z[i] + rho[i];
+          return is_finite(s) ? 0.0 : static_cast<double>(gid[i] + 1);
+        },
+        0.0);
     return static_cast<std::int64_t>(r) - 1;
   }
 
@@ -229,9 +242,10 @@ class SphStage final : public FluidStage {
     const auto x = x_.cview();
     const auto type = type_.cview();
     const CellGrid g = grid_;
-    for_each(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-      k[i] = 2 * g.key_of(x[i]) + (type[i] == kSphFluid ? 0 : 1);
-    });
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
+          k[i] = 2 * g.key_of(x[i]) + (type[i] == kSphFluid ? 0 : 1);
+        });
     counting_sort_host(keys_.to_host(), 2 * grid_.count(), hstart_, horder_);
     start_.assign(hstart_);
     order_.assign(horder_);
@@ -251,14 +265,16 @@ class SphStage final : public FluidStage {
     if (tmp.size() != n_) tmp.resize(n_);
     const auto src = b.cview();
     const auto dst = tmp.view();
-    for_each(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) { dst[i] = src[ord[i]]; });
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) { dst[i] = src[ord[i]]; });
     b.swap(tmp);
   }
   void permute3(Vec3Buffer& b, View<const std::int64_t> ord) {
     if (tmp3_.size() != n_) tmp3_.resize(n_);
     const auto src = b.cview();
     const auto dst = tmp3_.view();
-    for_each(Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) { dst.set(i, src[ord[i]]); });
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) { dst.set(i, src[ord[i]]); });
     std::swap(b, tmp3_);
   }
 
@@ -266,7 +282,8 @@ class SphStage final : public FluidStage {
   SphParams P_;
   std::int64_t n_ = 0, nf_ = 0;
   double pending_dt_ = 0;
-  double wall_volume_ = 0;  // dx^3  // time drifted since the last compute(): the density update's dt
+  double wall_volume_ =
+      0;  // dx^3  // time drifted since the last compute(): the density update's dt
   Vec3Buffer x_{S}, v_{S}, a_{S}, tmp3_{S};
   Buffer<double> rho_{S}, p_{S}, drho_{S}, m_{S}, tmpd_{S};
   Buffer<std::uint8_t> type_{S}, tmpt_{S};

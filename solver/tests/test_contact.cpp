@@ -1,9 +1,9 @@
 // The contact stage end to end on small scenes: momentum conservation, one touch counted
 // once, friction with history (stick on an incline, slide at g (sin - mu cos)), determinism.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <fmt/format.h>
 
 #include "integrate/stepper.hpp"
 #include "mesh/gmsh_io.hpp"
@@ -67,7 +67,9 @@ bodies: [{name: a, material: m, mesh: {type: box, size: [1, 1, 1], cells: [8, 8,
 )");
   EXPECT_TRUE(cube.model.contact.enabled);
   EXPECT_EQ(cube.model.contact.n_surface_tets, 2028);
-  EXPECT_EQ(describe_contact(cube.model).rfind("contact: 2028 surface tets, 768 surface triangles", 0), 0u);
+  EXPECT_EQ(
+      describe_contact(cube.model).rfind("contact: 2028 surface tets, 768 surface triangles", 0),
+      0u);
 }
 
 TEST(Contact, MomentumConservedInTwoBodyImpact) {
@@ -107,7 +109,8 @@ TEST(Contact, VertexOnSharedEdgeCountsOnce) {
   for (int k = 0; k < 2; ++k) {
     TetMesh tet;
     const Vec3 tip = tips[k] + Vec3{0, 0, 0.0005};  // gap 0.5 D_DEM
-    tet.points = {tip, tip + Vec3{0.1, 0, 0.2}, tip + Vec3{-0.05, 0.09, 0.2}, tip + Vec3{-0.05, -0.09, 0.2}};
+    tet.points = {tip, tip + Vec3{0.1, 0, 0.2}, tip + Vec3{-0.05, 0.09, 0.2},
+                  tip + Vec3{-0.05, -0.09, 0.2}};
     tet.tets = {{0, 1, 2, 3}};
     if (det(Mat3::from_columns(tet.points[1] - tet.points[0], tet.points[2] - tet.points[0],
                                tet.points[3] - tet.points[0])) < 0)

@@ -52,8 +52,8 @@ TEST(PointFace, VertexOnEdgeAndVertexOnVertex) {
 
 TEST(EdgeEdge, HandComputedCrossing) {
   // Edge 1 along x at z = 0.1, edge 2 along y at z = 0: crossing at (0.25, 0.75).
-  const EdgeEdge r = edge_edge({0, 0.75, 0.1}, {1, 0.75, 0.1}, {0.25, 0, 0}, {0.25, 1, 0},
-                               {0, 0, -1}, {0, 0, 1});
+  const EdgeEdge r =
+      edge_edge({0, 0.75, 0.1}, {1, 0.75, 0.1}, {0.25, 0, 0}, {0.25, 1, 0}, {0, 0, -1}, {0, 0, 1});
   ASSERT_TRUE(r.valid);
   EXPECT_NEAR(r.s, 0.25, 1e-15);
   EXPECT_NEAR(r.t, 0.75, 1e-15);
@@ -65,8 +65,8 @@ TEST(EdgeEdge, HandComputedCrossing) {
 
 TEST(EdgeEdge, CoplanarCrossingUsesFaceNormals) {
   // Zero distance: the normal comes from d1 x d2, oriented by the owning faces' normals.
-  const EdgeEdge r = edge_edge({0, 0.5, 0}, {1, 0.5, 0}, {0.5, 0, 0}, {0.5, 1, 0}, {0, 0, -1},
-                               {0, 0, 1});
+  const EdgeEdge r =
+      edge_edge({0, 0.5, 0}, {1, 0.5, 0}, {0.5, 0, 0}, {0.5, 1, 0}, {0, 0, -1}, {0, 0, 1});
   ASSERT_TRUE(r.valid);
   EXPECT_EQ(r.d, 0.0);
   EXPECT_NEAR(r.n.z, 1.0, 1e-15);
@@ -76,15 +76,17 @@ TEST(EdgeEdge, CoplanarCrossingUsesFaceNormals) {
 TEST(EdgeEdge, ParallelAndEndpointCasesAreNotEdgeContacts) {
   // Parallel (overlapping, coincident and offset): no contact, no NaN.
   for (double off : {0.0, 0.05, 1e-300}) {
-    const EdgeEdge r = edge_edge({0, 0, off}, {1, 0, off}, {0.5, 0, 0}, {1.5, 0, 0}, {0, 0, -1},
-                                 {0, 0, 1});
+    const EdgeEdge r =
+        edge_edge({0, 0, off}, {1, 0, off}, {0.5, 0, 0}, {1.5, 0, 0}, {0, 0, -1}, {0, 0, 1});
     EXPECT_FALSE(r.valid);
     EXPECT_TRUE(std::isfinite(r.d));
   }
   // Nearly parallel (1e-6 rad) is treated as parallel.
-  EXPECT_FALSE(edge_edge({0, 0, 0.01}, {1, 1e-6, 0.01}, {0, 0, 0}, {1, 0, 0}, {0, 0, -1}, {0, 0, 1}).valid);
+  EXPECT_FALSE(
+      edge_edge({0, 0, 0.01}, {1, 1e-6, 0.01}, {0, 0, 0}, {1, 0, 0}, {0, 0, -1}, {0, 0, 1}).valid);
   // Vertex on edge: closest point at an endpoint of edge 1 -> covered by point-face.
-  EXPECT_FALSE(edge_edge({0.5, 0, 0.0}, {0.5, 1, 1}, {0, 0, 0}, {1, 0, 0}, {0, 0, -1}, {0, 0, 1}).valid);
+  EXPECT_FALSE(
+      edge_edge({0.5, 0, 0.0}, {0.5, 1, 1}, {0, 0, 0}, {1, 0, 0}, {0, 0, -1}, {0, 0, 1}).valid);
   // Vertex on vertex.
   EXPECT_FALSE(edge_edge({0, 0, 0}, {0, 1, 1}, {0, 0, 0}, {1, 0, 0}, {0, 0, -1}, {0, 0, 1}).valid);
   // Degenerate (zero-length) edge.

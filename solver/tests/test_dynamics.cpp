@@ -22,11 +22,14 @@ using testing::make_problem;
 std::string beam(const std::string& law, double viscosity, const std::string& cells,
                  const std::string& extra = "", const std::string& size = "[1, 0.1, 0.1]") {
   return "run: {mode: dynamic, end_time: 1.0}\n"
-         "materials: {m: {law: " + law + ", E: 1.0e7, nu: 0.3, density: 1000, viscosity: " +
-         std::to_string(viscosity) + "}}\n"
-         "bodies: [{name: beam, material: m, mesh: {type: box, size: " + size + ", cells: " +
-         cells + "}}]\n"
-         "constraints: [{type: fixed, body: beam, region: {x: [-1.0e-9, 1.0e-9]}}]\n" + extra;
+         "materials: {m: {law: " +
+         law + ", E: 1.0e7, nu: 0.3, density: 1000, viscosity: " + std::to_string(viscosity) +
+         "}}\n"
+         "bodies: [{name: beam, material: m, mesh: {type: box, size: " +
+         size + ", cells: " + cells +
+         "}}]\n"
+         "constraints: [{type: fixed, body: beam, region: {x: [-1.0e-9, 1.0e-9]}}]\n" +
+         extra;
 }
 
 Vec3 momentum(const Model& m, const HostFields& h) {
@@ -83,10 +86,11 @@ TEST(Dynamics, UndampedVibrationConservesEnergyOver100Periods) {
 // asymmetry couples them and energy beats between y and z, which a decrement misreads.
 TEST(Dynamics, KelvinVoigtLogDecrementMatchesTheory) {
   const double E = 1e7, eta = 2e4;
-  auto pb = make_problem(beam("linear", eta, "[10, 2, 1]",
-                              "loads: [{type: traction, body: beam, region: {x: [0.999999, 1.000001]},"
-                              " traction: [0, 0, -100], preload: true}]\n",
-                              "[1, 0.2, 0.1]"));
+  auto pb =
+      make_problem(beam("linear", eta, "[10, 2, 1]",
+                        "loads: [{type: traction, body: beam, region: {x: [0.999999, 1.000001]},"
+                        " traction: [0, 0, -100], preload: true}]\n",
+                        "[1, 0.2, 0.1]"));
   Stepper st(pb.model, *pb.backend, 0.5 * pb.model.dt_critical);
   ASSERT_TRUE(st.relax(1e-8, 1000000, true).converged);
   std::vector<std::int64_t> tip;
@@ -117,8 +121,8 @@ TEST(Dynamics, KelvinVoigtLogDecrementMatchesTheory) {
   const double omega_d = 2 * M_PI * n / (pt[n] - pt[0]);
   const double omega = omega_d / std::sqrt(1 - zeta * zeta);
   const double expect = eta * omega / (2 * E);
-  std::printf("log decrement: zeta %.5f, eta omega/(2E) %.5f (omega %.3f rad/s)\n", zeta,
-              expect, omega);
+  std::printf("log decrement: zeta %.5f, eta omega/(2E) %.5f (omega %.3f rad/s)\n", zeta, expect,
+              omega);
   EXPECT_NEAR(zeta, expect, 0.05 * expect);
 }
 
@@ -165,9 +169,10 @@ TEST(Statics, CantileverTipDeflectionConvergesUnderRefinement) {
   const double timo = eb + P * L / (k * G * b * b);
   std::vector<double> tip;
   for (const char* cells : {"[5, 1, 1]", "[10, 1, 1]", "[20, 2, 2]"}) {
-    auto pb = make_problem(beam("linear", 0, cells,
-                                "loads: [{type: traction, body: beam, region: {x: [0.999999, 1.000001]},"
-                                " traction: [0, 0, -100]}]\n"));
+    auto pb =
+        make_problem(beam("linear", 0, cells,
+                          "loads: [{type: traction, body: beam, region: {x: [0.999999, 1.000001]},"
+                          " traction: [0, 0, -100]}]\n"));
     Stepper st(pb.model, *pb.backend, 0.5 * pb.model.dt_critical);
     const RelaxResult r = st.relax(1e-8, 2000000, false);
     ASSERT_TRUE(r.converged);

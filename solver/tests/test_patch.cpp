@@ -16,8 +16,8 @@ namespace qdemsph {
 namespace {
 
 Vec3 exact_u(Vec3 p) {
-  return 1e-3 * Vec3{(2 * p.x + p.y + p.z) / 2, (p.x + 2 * p.y + p.z) / 2,
-                     (p.x + p.y + 2 * p.z) / 2};
+  return 1e-3 *
+         Vec3{(2 * p.x + p.y + p.z) / 2, (p.x + 2 * p.y + p.z) / 2, (p.x + p.y + 2 * p.z) / 2};
 }
 
 // Splits the hex (quad a, quad b, a_i joined to b_i) into 12 tets around a new centre
@@ -76,7 +76,9 @@ constraints:
 )";
   for (int i = 0; i < 8; ++i) {
     const Vec3 p = mesh.points[i];
-    auto r = [](double c) { return "[" + std::to_string(c - 1e-9) + ", " + std::to_string(c + 1e-9) + "]"; };
+    auto r = [](double c) {
+      return "[" + std::to_string(c - 1e-9) + ", " + std::to_string(c + 1e-9) + "]";
+    };
     yaml += "  - {type: fixed, body: cube, region: {x: " + r(p.x) + ", y: " + r(p.y) +
             ", z: " + r(p.z) + "}}\n";
   }

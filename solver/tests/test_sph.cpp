@@ -211,8 +211,10 @@ fluid:
   ASSERT_EQ(s.fluid.tanks.size(), 1u);
   EXPECT_EQ(s.fluid.tanks[0].thickness_layers, 3);
   try {
-    parse_scene("run: {end_time: 0.1}\nfluid: {spacing: 0.02, blocks: [{min: [0, 0, 0], max: [0, 1, 1]}]}\n",
-                "bad.yaml", {});
+    parse_scene(
+        "run: {end_time: 0.1}\nfluid: {spacing: 0.02, blocks: [{min: [0, 0, 0], max: [0, 1, "
+        "1]}]}\n",
+        "bad.yaml", {});
     FAIL() << "a block with max.x <= min.x must be refused";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("fluid.blocks.0.max.0"), std::string::npos) << e.what();
