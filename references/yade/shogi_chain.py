@@ -32,18 +32,14 @@ import yade_setup as ys  # noqa: E402
 from yade import O, PyRunner  # noqa: E402
 
 p = ys.add_common_args(argparse.ArgumentParser(description=__doc__), dt=2e-5, young=1e7, mu=0.5)
+ss.add_piece_args(p, pitch=0.6, pitch_help="spacing / piece height", tilt0=21.5, omega0=5.0,
+                  tend=3.0, max_rows=1000, omega_help="initial spin of piece 0, rad/s",
+                  tend_help="upper bound of simulated time, s")
 p.add_argument("--n", type=int, default=40)
-p.add_argument("--pitch", type=float, default=0.6, help="spacing / piece height")
-p.add_argument("--tilt0", type=float, default=21.5, help="initial tilt of piece 0, deg")
-p.add_argument("--omega0", type=float, default=5.0, help="initial spin of piece 0, rad/s")
 p.add_argument("--front-tilt", type=float, default=45.0)
 p.add_argument("--insert-tilt", type=float, default=5.0)
 p.add_argument("--lazy", action=argparse.BooleanOptionalAction, default=True)
-p.add_argument("--tend", type=float, default=3.0, help="upper bound of simulated time, s")
 p.add_argument("--tail", type=float, default=0.05, help="time kept after the last piece falls")
-p.add_argument("--density", type=float, default=common.BOXWOOD_DENSITY)
-p.add_argument("--size", default=common.SHOGI_DEFAULT, choices=sorted(common.SHOGI_SIZES))
-p.add_argument("--max-rows", type=int, default=1000)
 args = ys.parse(p, sys.argv)
 
 h, w, t = common.SHOGI_SIZES[args.size]

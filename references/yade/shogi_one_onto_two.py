@@ -28,14 +28,9 @@ import yade_setup as ys  # noqa: E402
 from yade import O  # noqa: E402
 
 p = ys.add_common_args(argparse.ArgumentParser(description=__doc__), dt=1e-5, young=1e8, mu=0.5)
-p.add_argument("--pitch", type=float, default=0.8, help="x spacing / piece height")
+ss.add_piece_args(p, pitch=0.8, pitch_help="x spacing / piece height", tilt0=25.0, omega0=0.0,
+                  tend=0.5, max_rows=2000, omega_help="initial spin of the striker (piece 0), rad/s")
 p.add_argument("--gap", type=float, default=0.1, help="base gap between the pair / width")
-p.add_argument("--tilt0", type=float, default=25.0, help="initial tilt of the striker, deg")
-p.add_argument("--omega0", type=float, default=0.0, help="initial spin of the striker, rad/s")
-p.add_argument("--tend", type=float, default=0.5, help="simulated time, s")
-p.add_argument("--density", type=float, default=common.BOXWOOD_DENSITY)
-p.add_argument("--size", default=common.SHOGI_DEFAULT, choices=sorted(common.SHOGI_SIZES))
-p.add_argument("--max-rows", type=int, default=2000)
 args = ys.parse(p, sys.argv)
 
 h, w, t = common.SHOGI_SIZES[args.size]

@@ -12,6 +12,21 @@ from yade import O, PyRunner
 from yade.minieigenHP import Vector3
 
 
+def add_piece_args(p, pitch, pitch_help, tilt0, omega0, tend, max_rows,
+                   omega_help="initial spin of piece 0 about its front bottom edge, rad/s",
+                   tend_help="simulated time, s"):
+    """Arguments every shogi script takes: spacing, the first piece's start, run length,
+    material density, piece size, CSV row cap."""
+    p.add_argument("--pitch", type=float, default=pitch, help=pitch_help)
+    p.add_argument("--tilt0", type=float, default=tilt0, help="initial tilt of piece 0, deg")
+    p.add_argument("--omega0", type=float, default=omega0, help=omega_help)
+    p.add_argument("--tend", type=float, default=tend, help=tend_help)
+    p.add_argument("--density", type=float, default=common.BOXWOOD_DENSITY)
+    p.add_argument("--size", default=common.SHOGI_DEFAULT, choices=sorted(common.SHOGI_SIZES))
+    p.add_argument("--max-rows", type=int, default=max_rows)
+    return p
+
+
 def piece_mass(size, density):
     vol, _ = common.polyhedron_volume_centroid(common.shogi_vertices(size), common.shogi_faces())
     return vol * density

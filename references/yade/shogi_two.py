@@ -29,14 +29,8 @@ import yade_setup as ys  # noqa: E402
 from yade import O  # noqa: E402
 
 p = ys.add_common_args(argparse.ArgumentParser(description=__doc__), dt=1e-5, young=1e8, mu=0.5)
-p.add_argument("--pitch", type=float, default=0.8, help="spacing / piece height")
-p.add_argument("--tilt0", type=float, default=25.0, help="initial tilt of piece 0, deg")
-p.add_argument("--omega0", type=float, default=0.0,
-               help="initial spin of piece 0 about its front bottom edge, rad/s")
-p.add_argument("--tend", type=float, default=0.5, help="simulated time, s")
-p.add_argument("--density", type=float, default=common.BOXWOOD_DENSITY)
-p.add_argument("--size", default=common.SHOGI_DEFAULT, choices=sorted(common.SHOGI_SIZES))
-p.add_argument("--max-rows", type=int, default=2000)
+ss.add_piece_args(p, pitch=0.8, pitch_help="spacing / piece height", tilt0=25.0, omega0=0.0,
+                  tend=0.5, max_rows=2000)
 args = ys.parse(p, sys.argv)
 
 h, w, t = common.SHOGI_SIZES[args.size]
