@@ -28,6 +28,7 @@
 #include <string>
 #include <utility>
 
+#include "contact/contact_history.hpp"
 #include "contact/contact_record.hpp"
 #include "contact/contact_sort_host.hpp"
 #include "core/memory.hpp"
@@ -290,6 +291,32 @@ class ContactStage {
     t.d_dem = d_dem_;
     t.self_contact = self_;
     return t;
+  }
+
+  // The active entries of the tangential history (after the last force evaluation), and
+  // their replacement after a re-upload (keys sorted, indices of the new model).
+  ContactHistory history() const {
+    ContactHistory h;
+    const std::vector<std::uint64_t> k1 = pk1_.to_host(), k2 = pk2_.to_host();
+    const std::vector<Vec3> xi = pxi_.to_host();
+    const std::vector<int> act = pact_.to_host();
+    const std::vector<ContactRecord> rec = rec_.to_host();
+    for (std::int64_t c = 0; c < n_prev_; ++c) {
+      if (!act[c]) continue;
+      h.k1.push_back(k1[c]);
+      h.k2.push_back(k2[c]);
+      h.xi.push_back(xi[c]);
+      h.v.push_back({rec[c].v[0], rec[c].v[1], rec[c].v[2], rec[c].v[3]});
+    }
+    return h;
+  }
+  void set_history(const ContactHistory& h) {
+    const std::int64_t n = static_cast<std::int64_t>(h.size());
+    pk1_.assign(h.k1);
+    pk2_.assign(h.k2);
+    pxi_.assign(h.xi);
+    pact_.assign(std::vector<int>(n, 1));
+    n_prev_ = n;
   }
 
   // Candidate pairs of the last broad phase (tests compare them with brute force).

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "contact/contact_history.hpp"
 #include "core/vec.hpp"
 #include "model/model.hpp"
 #include "physics/energies.hpp"
@@ -27,6 +28,15 @@ struct HostFields {
   std::vector<Vec3> x, v;
   std::vector<std::array<double, 6>> stress;  // Cauchy: xx, yy, zz, yz, xz, xy
   std::vector<double> von_mises;
+};
+
+// What a run carries besides x and v, indexed like the uploaded model: dissipated energy per
+// vertex and per tet, the relaxation start state (mark_relax_start) and the contact history.
+// A distributed run keeps it across a rebuild of its decomposition; a checkpoint stores it.
+struct BackendState {
+  std::vector<double> diss_v, diss_t;
+  std::vector<Vec3> x0, f0;
+  ContactHistory contact;
 };
 
 class Backend {
@@ -61,6 +71,28 @@ class Backend {
   virtual std::map<std::string, double> stage_seconds() const { return {}; }
   // The contact stage's counters of the last step (pairs, contacts, max_overlap, ...).
   virtual std::map<std::string, double> contact_stats() const { return {}; }
+
+  // ---- Used by distributed runs (parallel/distributed_backend.hpp) -----------------------
+  // compute_forces = element_forces(0, n_free_tets) + assemble_forces: the element forces of
+  // tets [t0, t1) into the corner array, then the gather to vertices, loads, damping and
+  // contact, so that a halo exchange can overlap the tets whose vertices are all owned.
+  virtual void element_forces(std::int64_t t0, std::int64_t t1, double dt_dissipation) = 0;
+  virtual void assemble_forces(double dt_dissipation, double mass_damping) = 0;
+  virtual BackendState save_state() = 0;
+  // After upload() of a model of the same sizes; the contact keys sorted.
+  virtual void restore_state(const BackendState& s) = 0;
+  // Halo exchange of x and v by index lists, packed where the data lives (on the GPU for
+  // CUDA): pack_halo writes 6 doubles (x, v) per entry of send_index, item-major, to host
+  // memory `out`; unpack_halo reads n_recv such records into vertices recv_base + k.
+  virtual void set_halo(const std::vector<std::int64_t>& send_index, std::int64_t recv_base,
+                        std::int64_t n_recv) = 0;
+  virtual void pack_halo(double* out) = 0;
+  virtual void unpack_halo(const double* in) = 0;
+  // max |x_i - x_i at the last mark_positions()| over the free vertices (how far owned
+  // vertices moved since the decomposition was rebuilt). The reference is allocated on the
+  // first mark, so a run that never marks pays nothing.
+  virtual void mark_positions() = 0;
+  virtual double max_moved() = 0;
 };
 
 // "cpu" (OpenMP) or "cuda"; throws InputError for an unknown or unavailable backend.

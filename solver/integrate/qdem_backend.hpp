@@ -35,6 +35,7 @@ class QdemBackend final : public Backend {
     nt_ = m.n_tets();
     nfv_ = m.n_free_vertices;
     nft_ = m.n_free_tets;
+    nct_ = m.n_counted_tets < 0 ? nft_ : m.n_counted_tets;
     gravity_ = m.gravity;
     X_.assign(m.X);
     x_.assign(m.x);
@@ -62,7 +63,9 @@ class QdemBackend final : public Backend {
     mats_.assign(m.materials);
     tf_.resize(4 * nt_);
     diss_t_.resize(nt_);
-    // Vertex -> (corner k, tet t) list, entries k * nt + t, in increasing order.
+    // Vertex -> (corner k, tet t) list, entries k * nt + t, ordered by (k, global tet id):
+    // on one rank that is increasing order; a rank of a distributed run sums the corners of
+    // its vertices in the same order, so forces agree with one rank bit for bit.
     std::vector<std::int64_t> off(nv_ + 1, 0);
     for (std::int64_t t = 0; t < nft_; ++t)
       for (int k = 0; k < 4; ++k) ++off[m.tets[t][k] + 1];
@@ -70,8 +73,12 @@ class QdemBackend final : public Backend {
     std::vector<std::int64_t> ent(off[nv_]), fill(off.begin(), off.end() - 1);
     for (int k = 0; k < 4; ++k)
       for (std::int64_t t = 0; t < nft_; ++t) ent[fill[m.tets[t][k]]++] = k * nt_ + t;
+    const std::int64_t ntt = nt_;
+    auto by_gid = [&](std::int64_t a, std::int64_t b) {
+      return a / ntt != b / ntt ? a < b : m.tet_gid[a % ntt] < m.tet_gid[b % ntt];
+    };
     for (std::int64_t i = 0; i < nv_; ++i)
-      std::sort(ent.begin() + off[i], ent.begin() + off[i + 1]);
+      std::sort(ent.begin() + off[i], ent.begin() + off[i + 1], by_gid);
     csr_off_.assign(off);
     csr_ent_.assign(ent);
     flag_.resize(1);
@@ -90,6 +97,11 @@ class QdemBackend final : public Backend {
   void use_preload(bool on) override { preload_ = on; }
 
   void compute_forces(double dt_diss, double alpha) override {
+    element_forces(0, nft_, dt_diss);
+    assemble_forces(dt_diss, alpha);
+  }
+
+  void element_forces(std::int64_t t0, std::int64_t t1, double dt_diss) override {
     const std::int64_t nt = nt_;
     const auto x = x_.cview(), v = v_.cview();
     const auto tv = tv_.cview();
@@ -101,7 +113,8 @@ class QdemBackend final : public Backend {
     const auto diss_t = diss_t_.view();
     unsigned long long* flag = flag_.view().p;
     for_each(
-        Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) {
+        Exec{}, t1 - t0, QDEMSPH_LAMBDA(std::int64_t j) {
+          const std::int64_t t = t0 + j;
           Vec3 xs[4], vs[4];
           for (int k = 0; k < 4; ++k) {
             const std::int32_t i = tv[k * nt + t];
@@ -116,6 +129,11 @@ class QdemBackend final : public Backend {
           for (int k = 0; k < 4; ++k) tf[k * nt + t] = e.f[k];
           if (dt_diss > 0) diss_t[t] += dt_diss * vol0[t] * e.stress.dissipation;
         });
+  }
+
+  void assemble_forces(double dt_diss, double alpha) override {
+    const auto v = v_.cview();
+    const auto tf = tf_.cview();
     const auto off = csr_off_.cview();
     const auto ent = csr_ent_.cview();
     const auto fext = (preload_ ? fpre_ : fext_).cview();
@@ -243,7 +261,7 @@ class QdemBackend final : public Backend {
         Exec{}, nfv_,
         QDEMSPH_LAMBDA(std::int64_t i) { return -dot(mass[i] * g + fext[i], x[i] - X[i]); });
     e.strain = reduce_sum(
-        Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) {
+        Exec{}, nct_, QDEMSPH_LAMBDA(std::int64_t t) {
           Vec3 xs[4];
           for (int k = 0; k < 4; ++k) xs[k] = x[tv[k * nt + t]];
           Mat3 Xi;
@@ -253,7 +271,7 @@ class QdemBackend final : public Backend {
           return vol0[t] * material_stress(mats[tmat[t]], F, Mat3{}).energy_density;
         });
     e.dissipated = reduce_sum(
-                       Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) { return diss_t[t]; }) +
+                       Exec{}, nct_, QDEMSPH_LAMBDA(std::int64_t t) { return diss_t[t]; }) +
                    reduce_sum(
                        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return diss_v[i]; });
     return e;
@@ -326,6 +344,93 @@ class QdemBackend final : public Backend {
 
   void sync() override { exec_sync(Exec{}); }
 
+  BackendState save_state() override {
+    BackendState st;
+    st.diss_v = diss_v_.to_host();
+    st.diss_t = diss_t_.to_host();
+    st.x0 = x0_.to_host();
+    st.f0 = f0_.to_host();
+    if (contact_) st.contact = contact_->history();
+    return st;
+  }
+
+  void restore_state(const BackendState& st) override {
+    auto check = [&](std::size_t n, std::int64_t want, const char* what) {
+      if (static_cast<std::int64_t>(n) != want)
+        throw std::invalid_argument(std::string("restore_state: ") + what + " has " +
+                                    std::to_string(n) + " entries, the model " +
+                                    std::to_string(want));
+    };
+    check(st.diss_v.size(), nv_, "diss_v");
+    check(st.diss_t.size(), nt_, "diss_t");
+    check(st.x0.size(), nv_, "x0");
+    check(st.f0.size(), nv_, "f0");
+    diss_v_.assign(st.diss_v);
+    diss_t_.assign(st.diss_t);
+    x0_.assign(st.x0);
+    f0_.assign(st.f0);
+    if (contact_) contact_->set_history(st.contact);
+  }
+
+  void set_halo(const std::vector<std::int64_t>& send_index, std::int64_t recv_base,
+                std::int64_t n_recv) override {
+    halo_send_.assign(send_index);
+    halo_base_ = recv_base;
+    halo_nrecv_ = n_recv;
+    const std::int64_t n = std::max<std::int64_t>(send_index.size(), n_recv);
+    if constexpr (S != Space::Host) halo_buf_.resize(6 * n);
+  }
+
+  // Records of 6 doubles: x then v of one vertex. On the host the records go straight to
+  // `out`; on a device they are packed there and copied once.
+  void pack_halo(double* out) override {
+    const std::int64_t n = halo_send_.size();
+    if (n == 0) return;
+    const auto idx = halo_send_.cview();
+    const auto x = x_.cview(), v = v_.cview();
+    double* buf = S == Space::Host ? out : halo_buf_.view().p;
+    for_each(
+        Exec{}, n, QDEMSPH_LAMBDA(std::int64_t k) {
+          const std::int64_t i = idx[k];
+          double* r = buf + 6 * k;
+          r[0] = x.x[i], r[1] = x.y[i], r[2] = x.z[i];
+          r[3] = v.x[i], r[4] = v.y[i], r[5] = v.z[i];
+        });
+    if constexpr (S != Space::Host) space_copy(out, Space::Host, buf, S, 6 * n * sizeof(double));
+  }
+
+  void unpack_halo(const double* in) override {
+    const std::int64_t n = halo_nrecv_, base = halo_base_;
+    if (n == 0) return;
+    const double* buf = in;
+    if constexpr (S != Space::Host) {
+      space_copy(halo_buf_.view().p, S, in, Space::Host, 6 * n * sizeof(double));
+      buf = halo_buf_.view().p;
+    }
+    const auto x = x_.view(), v = v_.view();
+    for_each(
+        Exec{}, n, QDEMSPH_LAMBDA(std::int64_t k) {
+          const double* r = buf + 6 * k;
+          x.set(base + k, Vec3{r[0], r[1], r[2]});
+          v.set(base + k, Vec3{r[3], r[4], r[5]});
+        });
+  }
+
+  void mark_positions() override {
+    xmark_.resize(nv_);
+    const auto x = x_.cview();
+    const auto xm = xmark_.view();
+    for_each(
+        Exec{}, nv_, QDEMSPH_LAMBDA(std::int64_t i) { xm.set(i, x[i]); });
+  }
+
+  double max_moved() override {
+    if (xmark_.size() != nv_) return 0;
+    const auto x = x_.cview(), xm = xmark_.cview();
+    return reduce_max(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return norm(x[i] - xm[i]); }, 0.0);
+  }
+
   std::size_t device_bytes() const override {
     return X_.bytes() + x_.bytes() + v_.bytes() + f_.bytes() + fext_.bytes() + fpre_.bytes() +
            mass_.bytes() + inv_mass_.bytes() + relax_inv_mass_.bytes() + diss_v_.bytes() +
@@ -336,7 +441,7 @@ class QdemBackend final : public Backend {
 
  private:
   std::string name_;
-  std::int64_t nv_ = 0, nt_ = 0, nfv_ = 0, nft_ = 0;
+  std::int64_t nv_ = 0, nt_ = 0, nfv_ = 0, nft_ = 0, nct_ = 0;
   Vec3 gravity_;
   bool preload_ = false;
   Vec3Buffer X_{S}, x_{S}, v_{S}, f_{S}, fext_{S}, fpre_{S}, x0_{S}, f0_{S};
@@ -347,6 +452,11 @@ class QdemBackend final : public Backend {
   Buffer<Material> mats_{S};
   Buffer<std::int64_t> csr_off_{S}, csr_ent_{S};
   Buffer<unsigned long long> flag_{S};
+  // Distributed runs only (empty otherwise): halo send list and staging, moved-reference.
+  Buffer<std::int64_t> halo_send_{S};
+  Buffer<double> halo_buf_{S};
+  std::int64_t halo_base_ = 0, halo_nrecv_ = 0;
+  Vec3Buffer xmark_{S};
   std::unique_ptr<ContactStage<Exec>> contact_;  // null when the model needs no contact
 };
 

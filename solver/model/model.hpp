@@ -53,6 +53,10 @@ struct Model {
   std::vector<Material> materials;
   std::vector<BodyRange> bodies;
   std::int64_t n_free_vertices = 0, n_free_tets = 0;
+  // Tets counted in the energies: [0, n_counted_tets), -1 = all free tets. A rank's part of
+  // a distributed model (parallel/local_model.hpp) lists its home tets first, so that every
+  // tet is counted once over the ranks although boundary tets are computed on several.
+  std::int64_t n_counted_tets = -1;
   Vec3 gravity{0, 0, 0};
   double mass_damping = 0;
 

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -60,6 +61,17 @@ struct TreeCell {
 std::vector<TreeCell> refine_cells(Curve curve, int order, std::span<const std::uint64_t> item_keys,
                                    std::span<const double> item_cost, double max_cost,
                                    int min_level = 0);
+
+// The same refinement with the costs from a callback, level by level: cost_of(keys, spans,
+// costs) fills the cost of every cell [key, key + span) of one tree level in one call, so
+// that a distributed caller (parallel/balance.hpp) sums the ranks' local costs with one
+// reduction per level instead of gathering every item. cost_of must return the same values on
+// every rank (the tree is then the same everywhere).
+using CellCostFn =
+    std::function<void(std::span<const std::uint64_t> keys, std::span<const std::uint64_t> spans,
+                       std::span<double> costs)>;
+std::vector<TreeCell> refine_cells_by(Curve curve, int order, double max_cost, int min_level,
+                                      const CellCostFn& cost_of);
 
 // Index of the leaf whose segment contains a finest key.
 inline std::size_t find_leaf(std::span<const TreeCell> leaves, std::uint64_t key) {

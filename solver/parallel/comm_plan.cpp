@@ -78,10 +78,8 @@ void CommEngine::begin(std::span<const CommField> src, Dir dir) {
   const bool fwd = dir == Dir::Forward;
   // Forward sends along send_off_ and receives along recv_off_; reverse swaps them.
   const std::vector<std::int64_t>& so = fwd ? send_off_ : recv_off_;
-  const std::vector<std::int64_t>& ro = fwd ? recv_off_ : send_off_;
   check_fields(src, fwd ? n_items_ : recv_base_ + n_recv(), "source");
   sendbuf_.resize(stride_ * so[size_]);
-  recvbuf_.resize(stride_ * ro[size_]);
   // Pack, item-major. Bytes: stride per slot each way.
   const std::int64_t ns = so[size_];
   std::size_t off = 0;
@@ -92,6 +90,16 @@ void CommEngine::begin(std::span<const CommField> src, Dir dir) {
     }
     off += f.elem;
   }
+  seconds_.pack += MPI_Wtime() - t0;
+  post(dir);
+}
+
+void CommEngine::post(Dir dir) {
+  const double t0 = MPI_Wtime();
+  const bool fwd = dir == Dir::Forward;
+  const std::vector<std::int64_t>& so = fwd ? send_off_ : recv_off_;
+  const std::vector<std::int64_t>& ro = fwd ? recv_off_ : send_off_;
+  recvbuf_.resize(stride_ * ro[size_]);
   // Post receives first, then sends; the self part is a copy.
   reqs_.clear();
   last_bytes_ = 0;
@@ -118,6 +126,28 @@ void CommEngine::begin(std::span<const CommField> src, Dir dir) {
   seconds_.pack += MPI_Wtime() - t0;
   dir_ = dir;
   in_flight_ = true;
+}
+
+std::span<std::byte> CommEngine::packed_send_buffer(std::size_t stride) {
+  if (in_flight_) throw std::logic_error("comm plan: packing while an exchange is in flight");
+  stride_ = stride;
+  sendbuf_.resize(stride_ * send_off_[size_]);
+  return sendbuf_;
+}
+
+void CommEngine::begin_packed() {
+  if (in_flight_) throw std::logic_error("comm plan: begin() while an exchange is in flight");
+  post(Dir::Forward);
+}
+
+std::span<const std::byte> CommEngine::finish_packed() {
+  if (!in_flight_) throw std::logic_error("comm plan: finish() without begin()");
+  if (dir_ != Dir::Forward) throw std::logic_error("comm plan: finish() in another direction");
+  const double t0 = MPI_Wtime();
+  MPI_Waitall(static_cast<int>(reqs_.size()), reqs_.data(), MPI_STATUSES_IGNORE);
+  in_flight_ = false;
+  seconds_.wait += MPI_Wtime() - t0;
+  return {recvbuf_.data(), stride_ * static_cast<std::size_t>(n_recv())};
 }
 
 void CommEngine::finish(std::span<const CommField> dst, Dir dir) {

@@ -103,6 +103,15 @@ class CommEngine {
   void finish(std::span<const CommField> dst, Dir dir);
   bool in_flight() const { return in_flight_; }
 
+  // Packed forward exchange, for callers that pack their own records (a GPU backend packs
+  // on the device): fill packed_send_buffer(stride) with one record of `stride` bytes per
+  // send slot, in send_index() order, then begin_packed(); finish_packed() waits and returns
+  // the received records in receive-slot order (recv_base() + k for record k).
+  const std::vector<std::int64_t>& send_index() const { return send_index_; }
+  std::span<std::byte> packed_send_buffer(std::size_t stride);
+  void begin_packed();
+  std::span<const std::byte> finish_packed();
+
   std::int64_t n_send() const { return static_cast<std::int64_t>(send_index_.size()); }
   std::int64_t n_recv() const { return recv_off_.back(); }
   std::int64_t recv_base() const { return recv_base_; }
@@ -131,6 +140,7 @@ class CommEngine {
   std::vector<std::byte> sendbuf_, recvbuf_;
   std::vector<MPI_Request> reqs_;
   std::size_t stride_ = 0;
+  void post(Dir dir);  // posts receives and sends of the packed sendbuf_ (begin's second half)
   bool in_flight_ = false;
   Dir dir_ = Dir::Forward;
   std::int64_t last_bytes_ = 0, total_bytes_ = 0;
