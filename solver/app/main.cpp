@@ -10,9 +10,28 @@
 #include "core/gpu_info.hpp"
 #include "core/memory.hpp"
 #include "io/scene_yaml.hpp"
+#ifdef QDEMSPH_HAVE_MPI
+#include "parallel/world.hpp"
+#endif
 
 int main(int argc, char** argv) {
   using namespace qdemsph;
+#ifdef QDEMSPH_HAVE_MPI
+  // Under mpirun every rank runs this; errors of the scene and the simulation are seen by all
+  // ranks alike (rank 0 reports them), any other error ends every rank (world_abort).
+  const World& mpi = world_start(&argc, &argv);
+  struct StopMpi {
+    ~StopMpi() { world_stop(); }
+  } stop_mpi;
+  const bool report = mpi.root();
+  auto internal = [&](int code) {
+    if (mpi.size > 1) world_abort(code);
+    return code;
+  };
+#else
+  const bool report = true;
+  auto internal = [](int code) { return code; };
+#endif
   CLI::App app{"qdemsph: QDEM viscoelastic bodies with polygon contact and WCSPH fluid"};
   app.require_subcommand(1);
 
@@ -62,13 +81,13 @@ int main(int argc, char** argv) {
     if (mesh->parsed()) export_meshes(scene, mesh_dir);
     return 0;
   } catch (const InputError& e) {
-    fmt::print(stderr, "qdemsph: error: {}\n", e.what());
+    if (report) fmt::print(stderr, "qdemsph: error: {}\n", e.what());
     return 2;
   } catch (const SimulationError& e) {
-    fmt::print(stderr, "qdemsph: simulation failed: {}\n", e.what());
+    if (report) fmt::print(stderr, "qdemsph: simulation failed: {}\n", e.what());
     return 4;
   } catch (const std::exception& e) {
     fmt::print(stderr, "qdemsph: internal error: {}\n", e.what());
-    return 1;
+    return internal(1);
   }
 }

@@ -19,7 +19,12 @@
 #include "io/probes_csv.hpp"
 #include "mesh/gmsh_io.hpp"
 #include "model/model.hpp"
+#include "parallel/parallel_record.hpp"
 #include "sph/fluid_stage.hpp"
+#ifdef QDEMSPH_HAVE_MPI
+#include "parallel/distributed_backend.hpp"
+#include "parallel/world.hpp"
+#endif
 
 namespace qdemsph {
 namespace {
@@ -107,6 +112,25 @@ double fluid_dt(const FluidSetup& f) {
       .min();
 }
 
+// Under mpirun a file written by rank 0 alone must not fail on rank 0 alone (the others
+// would wait forever): report and end every rank. On one rank, the error propagates.
+template <class F>
+void on_root(bool distributed, F&& write) {
+#ifdef QDEMSPH_HAVE_MPI
+  if (distributed) {
+    try {
+      write();
+    } catch (const std::exception& e) {
+      fmt::print(stderr, "qdemsph: error: {}\n", e.what());
+      world_abort(2);
+    }
+    return;
+  }
+#endif
+  (void)distributed;
+  write();
+}
+
 }  // namespace
 
 int run_scene(const Scene& scene, const RunOptions& opt) {
@@ -114,7 +138,24 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   if (scene.run.threads > 0) omp_set_num_threads(scene.run.threads);
   const Model model = build_model(scene);
   const std::string backend_name = opt.backend.value_or(scene.run.backend);
-  auto be = make_backend(backend_name);
+  std::unique_ptr<Backend> be = make_backend(backend_name);
+  // Under mpirun with several ranks, the backend is the distributed decorator around it
+  // (docs/parallel.md); rank 0 writes every file.
+  bool distributed = false, root = true;
+#ifdef QDEMSPH_HAVE_MPI
+  DistributedBackend* dist = nullptr;
+  if (world().size > 1) {
+    if (scene.fluid.present)
+      throw InputError(
+          "fluid: SPH particles are not distributed over MPI ranks yet; run scenes "
+          "with fluid on one rank (docs/parallel.md)");
+    auto d = make_distributed_backend(std::move(be), parallel_options(scene.parallel));
+    dist = d.get();
+    be = std::move(d);
+    distributed = true;
+    root = world().root();
+  }
+#endif
   be->upload(model);
   double dt = choose_dt(model, scene.run.dt, scene.run.dt_safety);
   std::optional<FluidSetup> fluid_setup;
@@ -135,8 +176,20 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   std::vector<std::string> names;
   for (const auto& p : scene.probes) names.push_back(p.name);
 
-  FieldWriter fields(dir, model.X, model.tets, model.body);
-  ProbeWriter probe_csv(dir, names);
+  std::optional<FieldWriter> fields;
+  std::optional<ProbeWriter> probe_csv;
+  std::string open_error;
+  if (root) try {
+      fields.emplace(dir, model.X, model.tets, model.body);
+      probe_csv.emplace(dir, names);
+    } catch (const InputError& e) {
+      if (!distributed) throw;
+      open_error = e.what();
+    }
+#ifdef QDEMSPH_HAVE_MPI
+  if (distributed && !world_all(open_error.empty()))
+    throw InputError(open_error.empty() ? "rank 0 could not create the output files" : open_error);
+#endif
   Stepper st(model, *be, dt);
   PhaseTimers& timers = st.timers();
   std::optional<FluidWriter> fluid_out;
@@ -180,7 +233,9 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   auto write_fields = [&](bool stress) {
     auto scope = timers.scope("output");
     const HostFields h = be->download(stress);
-    fields.write(st.time(), st.steps(), h.x, h.v, h.stress, h.von_mises);
+    if (root)
+      on_root(distributed,
+              [&] { fields->write(st.time(), st.steps(), h.x, h.v, h.stress, h.von_mises); });
     if (fluid) {
       const FluidHost fh = fluid->download();
       fluid_out->write(st.time(), st.steps(), fh.x, fh.v, fh.p, fh.rho, fh.type, fh.gid);
@@ -189,7 +244,10 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   auto write_probes = [&] {
     auto scope = timers.scope("output");
     const HostFields h = be->download(false);
-    probe_csv.write(st.time(), evaluate_probes(probes, model, h.x), be->energies());
+    const Energies e = be->energies();
+    if (root)
+      on_root(distributed,
+              [&] { probe_csv->write(st.time(), evaluate_probes(probes, model, h.x), e); });
     if (fluid) {
       const FluidStats fs = fluid->stats();
       const FluidHost fh = fluid->download();
@@ -209,6 +267,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     summary["sim_time"] = st.time();
     summary["energies"] = energies_json(be->energies());
     Json phases = Json::object();
+    std::map<std::string, double> phase_map = timers.seconds();
     for (const auto& [k, v] : timers.seconds()) phases[k] = v;
     // Contact runs inside the force evaluation: report it as phase "contact" (and its
     // sub-phases contact.broad / contact.narrow / contact.force), taken out of "elements".
@@ -218,9 +277,9 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       if (k.rfind("contact.", 0) == 0) contact_s += v;
     }
     if (model.contact.enabled) {
-      phases["contact"] = contact_s;
+      phases["contact"] = phase_map["contact"] = contact_s;
       if (timers.seconds().count("elements"))
-        phases["elements"] = timers.seconds().at("elements") - contact_s;
+        phases["elements"] = phase_map["elements"] = timers.seconds().at("elements") - contact_s;
       Json cj = Json::object();
       for (const auto& [k, v] : be->contact_stats()) cj[k] = v;
       cj["d_dem"] = model.contact.d_dem;
@@ -231,6 +290,12 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       summary["contact"] = cj;
     }
     summary["phases"] = phases;
+#ifdef QDEMSPH_HAVE_MPI
+    if (dist) summary["parallel"] = dist->record(timers.seconds()).to_json();
+#endif
+    if (!distributed)
+      summary["parallel"] =
+          serial_parallel_record(model, scene.parallel.curve, phase_map).to_json();
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     summary["wall_s"] = wall;
@@ -242,10 +307,10 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
           sph_s > 0 ? static_cast<double>(fluid->size()) * st.steps() / sph_s : 0.0;
       if (fluid_csv) std::fclose(fluid_csv), fluid_csv = nullptr;
     }
-    summary.write_file(dir / "summary.json");
+    if (root) on_root(distributed, [&] { summary.write_file(dir / "summary.json"); });
   };
 
-  ProgressLine progress(!opt.quiet && isatty(STDERR_FILENO));
+  ProgressLine progress(root && !opt.quiet && isatty(STDERR_FILENO));
   int code = 0;
   try {
     bool preload = false;
@@ -265,12 +330,13 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       write_probes();
       write_fields(true);
       if (!r.converged) {
-        fmt::print(stderr,
-                   "qdemsph: static solve did not converge: residual {:.3e} > tolerance {:.3e} "
-                   "after {} steps (run.static.max_steps)\n",
-                   r.residual, scene.run.static_tolerance, r.iterations);
+        if (root)
+          fmt::print(stderr,
+                     "qdemsph: static solve did not converge: residual {:.3e} > tolerance {:.3e} "
+                     "after {} steps (run.static.max_steps)\n",
+                     r.residual, scene.run.static_tolerance, r.iterations);
         code = 3;
-      } else if (!opt.quiet) {
+      } else if (!opt.quiet && root) {
         fmt::print("static solve converged: residual {:.3e} after {} steps\n", r.residual,
                    r.iterations);
       }
@@ -321,7 +387,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     finish("failed", st.steps());
     throw;
   }
-  if (!opt.quiet)
+  if (!opt.quiet && root)
     fmt::print("{}: {} steps, t = {:.6g} s, wall {:.2f} s; output in {}\n", scene.name, st.steps(),
                st.time(),
                std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count(),

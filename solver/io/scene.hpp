@@ -155,6 +155,15 @@ struct WallSpec {
   std::optional<double> stiffness;    // absent: derived from the body's E and mesh size
 };
 
+// Domain decomposition when run on several MPI ranks (docs/parallel.md); no effect on one.
+struct ParallelSpec {
+  std::string curve = "hilbert";  // space-filling curve: hilbert | morton | peano
+  double rebalance_threshold =
+      0.10;                     // rebalance when measured max/mean - 1 of step time exceeds it
+  long rebalance_every = 100;   // steps between imbalance measurements
+  double max_cell_cost = 0.02;  // tree leaves are split above this fraction of a rank's load
+};
+
 struct Scene {
   std::filesystem::path file;  // where it was read from
   std::string name;
@@ -170,6 +179,7 @@ struct Scene {
   ContactSpec contact;
   std::vector<WallSpec> walls;  // analytic planes (contact), not fluid walls
   OutputSpec output;
+  ParallelSpec parallel;
 };
 
 }  // namespace qdemsph

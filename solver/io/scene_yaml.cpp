@@ -647,12 +647,26 @@ OutputSpec parse_output(const Context& ctx, const Field& f, const std::string& s
   return o;
 }
 
+ParallelSpec parse_parallel(const Context& ctx, const Field& f) {
+  const MapView m(ctx, f, {"curve", "rebalance_threshold", "rebalance_every", "max_cell_cost"});
+  ParallelSpec p;
+  if (auto v = m.opt("curve")) p.curve = v->choice({"hilbert", "morton", "peano"});
+  if (auto v = m.opt("rebalance_threshold"))
+    p.rebalance_threshold = v->number(non_negative, "must be >= 0 (a fraction, 0.1 = 10 %)");
+  if (auto v = m.opt("rebalance_every"))
+    p.rebalance_every = v->integer(1, std::numeric_limits<long>::max());
+  if (auto v = m.opt("max_cell_cost"))
+    p.max_cell_cost = v->number([](double x) { return x > 0 && x <= 1; },
+                                "must be in (0, 1] (a fraction of the mean load of a rank)");
+  return p;
+}
+
 Scene build_scene(const Context& ctx, const YAML::Node& root, const fs::path& file) {
   const Field top(ctx, root, "");
   if (!root.IsDefined() || root.IsNull()) throw InputError(file.string() + ": scene file is empty");
   const MapView m(ctx, top,
                   {"name", "run", "gravity", "damping", "materials", "bodies", "constraints",
-                   "loads", "probes", "fluid", "contact", "walls", "output"});
+                   "loads", "probes", "fluid", "contact", "walls", "output", "parallel"});
   Scene s;
   s.file = file;
   s.name = file.stem().string();
@@ -716,6 +730,7 @@ Scene build_scene(const Context& ctx, const YAML::Node& root, const fs::path& fi
     s.output = parse_output(ctx, *v, s.name);
   else
     s.output.dir = fs::path("out") / s.name;
+  if (auto v = m.opt("parallel")) s.parallel = parse_parallel(ctx, *v);
   return s;
 }
 

@@ -200,6 +200,7 @@ class HaloPlan {
     engine_->finish(f, CommEngine::Dir::Reverse);
   }
   const CommEngine& engine() const { return *engine_; }
+  CommEngine& engine() { return *engine_; }  // packed exchanges (CommEngine::begin_packed)
 
  private:
   std::int64_t n_owned_ = 0;

@@ -123,6 +123,11 @@ TEST(Scene, FullSceneParsesEveryKey) {
   EXPECT_EQ(s.output.dir, fs::path("out/full"));
   EXPECT_EQ(s.output.fields_every, 0.01);
   EXPECT_EQ(s.output.probes_every, 0.001);
+
+  EXPECT_EQ(s.parallel.curve, "peano");
+  EXPECT_EQ(s.parallel.rebalance_threshold, 0.05);
+  EXPECT_EQ(s.parallel.rebalance_every, 50);
+  EXPECT_EQ(s.parallel.max_cell_cost, 0.01);
 }
 
 TEST(Scene, MinimalSceneTakesDefaults) {

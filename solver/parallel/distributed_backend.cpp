@@ -1,0 +1,907 @@
+#include "parallel/distributed_backend.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "core/timers.hpp"
+#include "parallel/balance.hpp"
+#include "parallel/comm_plan.hpp"
+#include "parallel/distributed_backend_mpi.hpp"
+#include "parallel/local_model.hpp"
+
+namespace qdemsph {
+
+ParallelOptions parallel_options(const ParallelSpec& spec) {
+  ParallelOptions o;
+  o.curve = spec.curve;
+  o.rebalance_threshold = spec.rebalance_threshold;
+  o.rebalance_every = spec.rebalance_every;
+  o.max_cell_cost = spec.max_cell_cost;
+  return o;
+}
+
+namespace {
+
+// All ranks' items (any trivially copyable type), in rank order. bytes += what this rank sent.
+template <class T>
+std::vector<T> allgatherv(MPI_Comm comm, const std::vector<T>& mine,
+                          std::int64_t* bytes = nullptr) {
+  int np = 1;
+  MPI_Comm_size(comm, &np);
+  int n = static_cast<int>(mine.size() * sizeof(T));
+  std::vector<int> counts(np), displs(np + 1, 0);
+  MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
+  for (int r = 0; r < np; ++r) displs[r + 1] = displs[r] + counts[r];
+  std::vector<T> all(displs[np] / sizeof(T));
+  MPI_Allgatherv(mine.data(), n, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE,
+                 comm);
+  if (bytes) *bytes += std::int64_t(n) * (np - 1);
+  return all;
+}
+
+// All ranks' items on rank 0 (empty elsewhere).
+template <class T>
+std::vector<T> gatherv(MPI_Comm comm, const std::vector<T>& mine) {
+  int np = 1, me = 0;
+  MPI_Comm_size(comm, &np);
+  MPI_Comm_rank(comm, &me);
+  int n = static_cast<int>(mine.size() * sizeof(T));
+  std::vector<int> counts(np), displs(np + 1, 0);
+  MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
+  for (int r = 0; r < np; ++r) displs[r + 1] = displs[r] + counts[r];
+  std::vector<T> all(me == 0 ? displs[np] / sizeof(T) : 0);
+  MPI_Gatherv(mine.data(), n, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, 0,
+              comm);
+  return all;
+}
+
+template <class T>
+CommField cfield(const std::vector<T>& v) {
+  return comm_field(const_cast<T*>(v.data()), static_cast<std::int64_t>(v.size()));
+}
+
+// Band cells: a fixed grid of width `band` anchored at the origin; coordinates packed in 21
+// bits each (offset by 2^20; the grid spans +-2^20 cells).
+std::uint64_t band_key(std::int64_t ix, std::int64_t iy, std::int64_t iz) {
+  constexpr std::int64_t off = std::int64_t{1} << 20, top = (std::int64_t{1} << 21) - 1;
+  auto c = [&](std::int64_t i) {
+    return static_cast<std::uint64_t>(std::clamp(i + off, std::int64_t{0}, top));
+  };
+  return (c(ix) << 42) | (c(iy) << 21) | c(iz);
+}
+
+struct BandCell {
+  std::int64_t i[3];
+};
+
+BandCell band_cell(Vec3 p, double band) {
+  return {{static_cast<std::int64_t>(std::floor(p.x / band)),
+           static_cast<std::int64_t>(std::floor(p.y / band)),
+           static_cast<std::int64_t>(std::floor(p.z / band))}};
+}
+
+// The 5^3 cells within two cells of c: any point within 2 band widths of a point of c.
+template <class F>
+void for_each_band_neighbour(const BandCell& c, F f) {
+  for (int a = -2; a <= 2; ++a)
+    for (int b = -2; b <= 2; ++b)
+      for (int d = -2; d <= 2; ++d) f(band_key(c.i[0] + a, c.i[1] + b, c.i[2] + d));
+}
+
+struct VertexRecord {
+  std::int64_t gid;
+  double x[3], v[3];
+};
+struct TetRecord {
+  std::int64_t gid;
+  double s[7];  // stress (Voigt) and von Mises
+};
+
+// Per-item time weights of the cost model [s per item per window]; only ratios matter. The
+// defaults (before anything is measured) say a tet costs about four vertices.
+struct Weights {
+  double vertex = 0.25, tet = 1.0, contact = 1.0;
+};
+
+class DistributedImpl final : public DistributedBackend {
+ public:
+  DistributedImpl(MPI_Comm comm, std::unique_ptr<Backend> local, const ParallelOptions& opt)
+      : local_(std::move(local)),
+        opt_(opt),
+        curve_(parse_curve(opt.curve)),
+        timers_([this] { local_->sync(); }) {
+    MPI_Comm_dup(comm, &comm_);
+    MPI_Comm_rank(comm_, &me_);
+    MPI_Comm_size(comm_, &np_);
+  }
+  ~DistributedImpl() override {
+    halo_.reset();
+    int finalized = 0;
+    MPI_Finalized(&finalized);
+    if (!finalized) MPI_Comm_free(&comm_);
+  }
+
+  std::string name() const override { return local_->name(); }
+  int rank() const override { return me_; }
+  int size() const override { return np_; }
+
+  // ---- setup -------------------------------------------------------------------------------
+
+  void upload(const Model& m) override {
+    g_ = &m;
+    ix_ = index_model(m);
+    owner_.assign(m.n_vertices(), -1);  // fixed bodies: no owner
+    contact_ = m.contact.enabled;
+    fixed_cells_.clear();
+    if (contact_) {
+      // Reach needed around an owned contact vertex (a touching primitive, the other side's
+      // owning triangle and its neighbours, both sides moving by `slack`): 2 diam + 2 D_DEM +
+      // 2 slack; two rings of band cells of width diam + D_DEM + slack cover it. diam: the
+      // largest primitive diameter, +25 % for deformation.
+      const double diam = 2.5 * ix_.prim_radius, d = m.contact.d_dem;
+      slack_ = 0.5 * (diam + d);
+      band_ = diam + d + slack_;
+      for (std::int64_t i = m.n_free_vertices; i < m.n_vertices(); ++i)
+        if (ix_.contact_vertex[i]) fixed_cells_[cell_key(m.X[i])].push_back(i);
+    }
+    precompute_fixed_output();
+    // Every rank starts from a contiguous slice of the model's state, then the first
+    // partition moves it to the owners: the restart path, taken by every run.
+    StateSlice s;
+    const std::int64_t nfv = m.n_free_vertices, nft = m.n_free_tets;
+    for (std::int64_t i = nfv * me_ / np_; i < nfv * (me_ + 1) / np_; ++i) {
+      s.vertex.push_back(i);
+      s.x.push_back(m.x[i]);
+      s.v.push_back(m.v[i]);
+      s.diss_v.push_back(0.0);
+    }
+    for (std::int64_t t = nft * me_ / np_; t < nft * (me_ + 1) / np_; ++t) {
+      s.tet.push_back(t);
+      s.diss_t.push_back(0.0);
+    }
+    adopt(s);
+  }
+
+  void adopt(const StateSlice& s) override {
+    if (!g_) throw std::logic_error("DistributedBackend::adopt before upload");
+    redistribute(s, true);
+  }
+
+  // ---- stages ------------------------------------------------------------------------------
+
+  void use_preload(bool on) override {
+    preload_ = on;
+    local_->use_preload(on);
+  }
+
+  void compute_forces(double dt_diss, double alpha) override {
+    if (dt_diss > 0) {
+      relaxing_ = false;
+      ++steps_;
+    }
+    maybe_rebuild(dt_diss > 0);
+    CommEngine& e = halo_->engine();
+    {
+      auto s = timers_.scope("halo");
+      auto buf = e.packed_send_buffer(6 * sizeof(double));
+      local_->pack_halo(reinterpret_cast<double*>(buf.data()));
+      e.begin_packed();
+    }
+    {
+      auto s = timers_.scope("elements");
+      local_->element_forces(0, L_.n_interior, dt_diss);
+    }
+    {
+      auto s = timers_.scope("halo");
+      const auto in = e.finish_packed();
+      local_->unpack_halo(reinterpret_cast<const double*>(in.data()));
+    }
+    {
+      auto s = timers_.scope("elements");
+      local_->element_forces(L_.n_interior, static_cast<std::int64_t>(L_.tets.size()), dt_diss);
+      local_->assemble_forces(dt_diss, alpha);
+    }
+    halo_bytes_ += e.last_bytes();
+    ++exchanges_;
+  }
+
+  void kick(double h) override {
+    auto s = timers_.scope("integration");
+    local_->kick(h);
+  }
+  void drift(double h) override {
+    auto s = timers_.scope("integration");
+    local_->drift(h);
+  }
+  void damped_step(double dt, double c) override {
+    auto s = timers_.scope("integration");
+    local_->damped_step(dt, c);
+  }
+  void zero_velocity() override { local_->zero_velocity(); }
+  void mark_relax_start() override {
+    relaxing_ = true;
+    local_->mark_relax_start();
+  }
+
+  StaticStats static_stats() override {
+    StaticStats s = local_->static_stats();
+    double mx = 0;
+    MPI_Allreduce(&s.residual_max, &mx, 1, MPI_DOUBLE, MPI_MAX, comm_);
+    double sums[2] = {s.rayleigh_num, s.rayleigh_den};
+    allreduce_sum_same(comm_, sums, 2);
+    return {mx, sums[0], sums[1]};
+  }
+
+  Energies energies() override {
+    const Energies e = local_->energies();
+    double a[4] = {e.kinetic, e.strain, e.potential, e.dissipated};
+    allreduce_sum_same(comm_, a, 4);
+    return {a[0], a[1], a[2], a[3]};
+  }
+
+  std::int64_t find_non_finite() override {
+    const std::int64_t i = local_->find_non_finite();
+    return min_over_ranks(i < 0 ? -1 : L_.vertices[i]);
+  }
+
+  std::int64_t take_inverted_tet() override {
+    const std::int64_t t = local_->take_inverted_tet();
+    return min_over_ranks(t < 0 ? -1 : L_.tets[t]);
+  }
+
+  // Global fields on rank 0: free vertices and tets from their owners / home ranks, fixed
+  // bodies from the model (they never move) and the stress computed for them at upload.
+  HostFields download(bool with_stress) override {
+    if (with_stress) refresh_ghosts();  // ghost v after the last kick, for viscous stress
+    const HostFields h = local_->download(with_stress);
+    std::vector<VertexRecord> vr(L_.n_owned);
+    for (std::int64_t i = 0; i < L_.n_owned; ++i)
+      vr[i] = {L_.vertices[i], {h.x[i].x, h.x[i].y, h.x[i].z}, {h.v[i].x, h.v[i].y, h.v[i].z}};
+    const std::vector<VertexRecord> allv = gatherv(comm_, vr);
+    std::vector<TetRecord> all_t;
+    if (with_stress) {
+      std::vector<TetRecord> tr(L_.n_home);
+      for (std::int64_t j = 0; j < L_.n_home; ++j) {
+        tr[j].gid = L_.tets[j];
+        for (int c = 0; c < 6; ++c) tr[j].s[c] = h.stress[j][c];
+        tr[j].s[6] = h.von_mises[j];
+      }
+      all_t = gatherv(comm_, tr);
+    }
+    HostFields out;
+    if (me_ != 0) return out;
+    const Model& g = *g_;
+    out.x = g.x;
+    out.v = g.v;
+    for (const VertexRecord& r : allv) {
+      out.x[r.gid] = {r.x[0], r.x[1], r.x[2]};
+      out.v[r.gid] = {r.v[0], r.v[1], r.v[2]};
+    }
+    if (with_stress) {
+      out.stress.assign(g.n_tets(), {});
+      out.von_mises.assign(g.n_tets(), 0.0);
+      for (std::size_t k = 0; k < fixed_vm_.size(); ++k) {
+        out.stress[g.n_free_tets + k] = fixed_stress_[k];
+        out.von_mises[g.n_free_tets + k] = fixed_vm_[k];
+      }
+      for (const TetRecord& r : all_t) {
+        for (int c = 0; c < 6; ++c) out.stress[r.gid][c] = r.s[c];
+        out.von_mises[r.gid] = r.s[6];
+      }
+    }
+    return out;
+  }
+
+  void sync() override { local_->sync(); }
+
+  std::size_t device_bytes() const override {
+    std::int64_t mine = static_cast<std::int64_t>(local_->device_bytes()), all = 0;
+    MPI_Allreduce(&mine, &all, 1, MPI_INT64_T, MPI_SUM, comm_);
+    return static_cast<std::size_t>(all);
+  }
+
+  // Contact sub-phases: the largest over ranks (parallel.phases_* has max and mean).
+  std::map<std::string, double> stage_seconds() const override {
+    if (!contact_) return {};
+    const std::map<std::string, double> mine = local_stage_seconds();
+    const char* keys[] = {"contact.broad", "contact.narrow", "contact.force"};
+    double v[3], mx[3];
+    for (int k = 0; k < 3; ++k) {
+      const auto it = mine.find(keys[k]);
+      v[k] = it == mine.end() ? 0.0 : it->second;
+    }
+    MPI_Allreduce(v, mx, 3, MPI_DOUBLE, MPI_MAX, comm_);
+    return {{keys[0], mx[0]}, {keys[1], mx[1]}, {keys[2], mx[2]}};
+  }
+
+  // Counts summed over ranks (a pair across a border is counted on each rank evaluating it),
+  // overlaps the largest.
+  std::map<std::string, double> contact_stats() const override {
+    if (!contact_) return {};
+    std::map<std::string, double> c = local_->contact_stats();
+    double s[3] = {c["pairs"], c["contacts"], c["active"]}, ss[3];
+    double m[3] = {c["max_overlap"], std::max(c["max_overlap_ever"], overlap_acc_),
+                   c["pair_rebuilds"] + rebuilds_acc_},
+           mm[3];
+    MPI_Allreduce(s, ss, 3, MPI_DOUBLE, MPI_SUM, comm_);
+    MPI_Allreduce(m, mm, 3, MPI_DOUBLE, MPI_MAX, comm_);
+    return {{"pairs", ss[0]},       {"contacts", ss[1]},         {"active", ss[2]},
+            {"max_overlap", mm[0]}, {"max_overlap_ever", mm[1]}, {"pair_rebuilds", mm[2]}};
+  }
+
+  // Stages of a rank's own backend, not of the decorator.
+  void element_forces(std::int64_t, std::int64_t, double) override {
+    unsupported("element_forces");
+  }
+  void assemble_forces(double, double) override { unsupported("assemble_forces"); }
+  BackendState save_state() override { unsupported("save_state (use export_state)"); }
+  void restore_state(const BackendState&) override { unsupported("restore_state (use adopt)"); }
+  void set_halo(const std::vector<std::int64_t>&, std::int64_t, std::int64_t) override {
+    unsupported("set_halo");
+  }
+  void pack_halo(double*) override { unsupported("pack_halo"); }
+  void unpack_halo(const double*) override { unsupported("unpack_halo"); }
+  void mark_positions() override { unsupported("mark_positions"); }
+  double max_moved() override { unsupported("max_moved"); }
+
+  // ---- records and the checkpoint hook -----------------------------------------------------
+
+  ParallelRecord record(const std::map<std::string, double>& run_phases) override {
+    if (steps_ > window_start_) measure_window();
+    ParallelRecord r;
+    r.ranks = np_;
+    r.curve = curve_name(curve_);
+    r.rebalances = rebalances_;
+    r.imbalance = last_imbalance_;
+    r.imbalance_initial = imbalance_initial_;
+    r.rebalance_log = log_;
+    const auto& t = timers_.seconds();
+    auto sec = [](const std::map<std::string, double>& m, const char* k) {
+      const auto it = m.find(k);
+      return it == m.end() ? 0.0 : it->second;
+    };
+    const double contact = local_contact_seconds();
+    double p[8] = {sec(t, "elements") - contact,
+                   sec(t, "integration"),
+                   contact,
+                   sec(run_phases, "sph"),
+                   sec(t, "halo"),
+                   sec(t, "migration"),
+                   sec(t, "balance"),
+                   sec(run_phases, "output")};
+    double mx[8], sum[8];
+    MPI_Allreduce(p, mx, 8, MPI_DOUBLE, MPI_MAX, comm_);
+    std::copy(p, p + 8, sum);
+    allreduce_sum_same(comm_, sum, 8);
+    for (int k = 0; k < 8; ++k) {
+      r.phases_max[kParallelPhases[k]] = mx[k];
+      r.phases_mean[kParallelPhases[k]] = sum[k] / np_;
+    }
+    r.owned_vertices = allgatherv(comm_, std::vector<std::int64_t>{L_.n_owned});
+    r.owned_tets = allgatherv(comm_, std::vector<std::int64_t>{L_.n_home});
+    double b[3] = {static_cast<double>(migrated_bytes_), static_cast<double>(halo_bytes_),
+                   static_cast<double>(exchanges_)};
+    allreduce_sum_same(comm_, b, 3);
+    r.migrated_bytes = static_cast<std::int64_t>(b[0]);
+    r.halo_bytes_per_step = b[2] > 0 ? b[1] / (b[2] / np_) : 0.0;
+    return r;
+  }
+
+  StateSlice export_state() override {
+    StateSlice s;
+    const HostFields h = local_->download(false);
+    const BackendState st = local_->save_state();
+    for (std::int64_t i = 0; i < L_.n_owned; ++i) {
+      s.vertex.push_back(L_.vertices[i]);
+      s.x.push_back(h.x[i]);
+      s.v.push_back(h.v[i]);
+      s.diss_v.push_back(st.diss_v[i]);
+      if (relaxing_) {
+        s.x0.push_back(st.x0[i]);
+        s.f0.push_back(st.f0[i]);
+      }
+    }
+    for (std::int64_t j = 0; j < L_.n_home; ++j) {
+      s.tet.push_back(L_.tets[j]);
+      s.diss_t.push_back(st.diss_t[j]);
+    }
+    // Each history entry once: from the owner of its free vertex with the smallest id (that
+    // rank holds the pair's whole neighbourhood, so its entry is the right one).
+    const ContactHistory& c = st.contact;
+    for (std::size_t e = 0; e < c.size(); ++e) {
+      std::array<std::int64_t, 4> kv{-1, -1, -1, -1};
+      std::int64_t first = -1;
+      for (int k = 0; k < 4; ++k) {
+        if (c.v[e][k] < 0) continue;
+        kv[k] = L_.vertices[c.v[e][k]];
+        if (owner_[kv[k]] >= 0 && (first < 0 || kv[k] < first)) first = kv[k];
+      }
+      if (first < 0 || owner_[first] != me_) continue;
+      s.k1.push_back(ids_.k1_to_global(c.k1[e]));
+      s.k2.push_back(ids_.k2_to_global(c.k1[e], c.k2[e]));
+      s.xi.push_back(c.xi[e]);
+      s.kv.push_back(kv);
+    }
+    return s;
+  }
+
+  std::vector<std::int64_t> owned_vertices() const override {
+    return {L_.vertices.begin(), L_.vertices.begin() + L_.n_owned};
+  }
+  std::vector<std::int64_t> home_tets() const override {
+    return {L_.tets.begin(), L_.tets.begin() + L_.n_home};
+  }
+  std::int64_t rebuilds() const override { return rebuilds_; }
+  std::int64_t rebalances() const override { return rebalances_; }
+
+ private:
+  [[noreturn]] static void unsupported(const char* what) {
+    throw std::logic_error(std::string("DistributedBackend: ") + what +
+                           " belongs to a rank's own backend");
+  }
+
+  std::int64_t min_over_ranks(std::int64_t id) const {
+    std::int64_t v = id < 0 ? std::numeric_limits<std::int64_t>::max() : id, m = 0;
+    MPI_Allreduce(&v, &m, 1, MPI_INT64_T, MPI_MIN, comm_);
+    return m == std::numeric_limits<std::int64_t>::max() ? -1 : m;
+  }
+
+  std::uint64_t cell_key(Vec3 p) const {
+    const BandCell c = band_cell(p, band_);
+    return band_key(c.i[0], c.i[1], c.i[2]);
+  }
+
+  std::map<std::string, double> local_stage_seconds() const {
+    std::map<std::string, double> s = contact_acc_;
+    for (const auto& [k, v] : local_->stage_seconds()) s[k] += v;
+    return s;
+  }
+  double local_contact_seconds() const {
+    double c = 0;
+    for (const auto& [k, v] : local_stage_seconds())
+      if (k.rfind("contact.", 0) == 0) c += v;
+    return c;
+  }
+
+  void refresh_ghosts() {
+    auto s = timers_.scope("halo");
+    CommEngine& e = halo_->engine();
+    auto buf = e.packed_send_buffer(6 * sizeof(double));
+    local_->pack_halo(reinterpret_cast<double*>(buf.data()));
+    e.begin_packed();
+    const auto in = e.finish_packed();
+    local_->unpack_halo(reinterpret_cast<const double*>(in.data()));
+  }
+
+  // Fixed bodies do not deform: rank 0 computes their stress once (it is the round-off of
+  // F = I, as on one rank) with a host backend over the fixed bodies alone.
+  void precompute_fixed_output() {
+    fixed_stress_.clear();
+    fixed_vm_.clear();
+    const Model& g = *g_;
+    if (me_ != 0 || g.n_tets() == g.n_free_tets) return;
+    LocalLayout L;
+    std::vector<Vec3> x, v;
+    for (std::int64_t i = g.n_free_vertices; i < g.n_vertices(); ++i) {
+      L.vertices.push_back(i);
+      x.push_back(g.x[i]);
+      v.push_back(g.v[i]);
+    }
+    for (std::int64_t t = g.n_free_tets; t < g.n_tets(); ++t) L.tets.push_back(t);
+    const LocalModel lm = build_local_model(g, ix_, L, x, v, false);
+    auto be = make_host_backend();
+    be->upload(lm.model);
+    const HostFields h = be->download(true);
+    fixed_stress_ = h.stress;
+    fixed_vm_ = h.von_mises;
+  }
+
+  // Rebuild when some vertex moved `slack` (contact band) or, every rebalance_every steps,
+  // when the measured imbalance exceeds the threshold.
+  void maybe_rebuild(bool dynamic) {
+    bool rebuild = false, rebalance = false;
+    if (contact_) {
+      const double moved = local_->max_moved();
+      double m = 0;
+      MPI_Allreduce(&moved, &m, 1, MPI_DOUBLE, MPI_MAX, comm_);
+      rebuild = m > slack_;
+    }
+    if (dynamic && steps_ % opt_.rebalance_every == 0) {
+      const double imb = measure_window();
+      rebalance = np_ > 1 && imb > opt_.rebalance_threshold;
+    }
+    if (!rebuild && !rebalance) return;
+    const std::int64_t before = migrated_bytes_;
+    StateSlice s = export_state();
+    redistribute(s, rebalance);
+    if (rebalance) {
+      ++rebalances_;
+      log_.push_back({steps_, last_imbalance_, predicted_after_, migrated_bytes_ - before});
+      pending_after_ = true;
+    }
+  }
+
+  // Busy time of each rank since the last window: the imbalance, and the time per item that
+  // weights the cost of the next partition.
+  double measure_window() {
+    const auto& t = timers_.seconds();
+    auto sec = [&](const char* k) {
+      const auto it = t.find(k);
+      return it == t.end() ? 0.0 : it->second;
+    };
+    const double contact = local_contact_seconds();
+    const double te = sec("elements") - contact, ti = sec("integration");
+    const double busy = te + ti + contact;
+    double w[7] = {busy - mark_[0],
+                   te - mark_[1],
+                   ti - mark_[2],
+                   contact - mark_[3],
+                   static_cast<double>(L_.tets.size()),
+                   static_cast<double>(L_.n_owned),
+                   static_cast<double>(n_contact_owned_)};
+    mark_[0] = busy, mark_[1] = te, mark_[2] = ti, mark_[3] = contact;
+    double mx = 0;
+    MPI_Allreduce(&w[0], &mx, 1, MPI_DOUBLE, MPI_MAX, comm_);
+    allreduce_sum_same(comm_, w, 7);
+    const double mean = w[0] / np_;
+    const double imb = mean > 0 ? mx / mean - 1 : 0.0;
+    if (w[4] > 0 && w[1] > 0) w_.tet = w[1] / w[4];
+    if (w[5] > 0 && w[2] > 0) w_.vertex = w[2] / w[5];
+    if (w[6] > 0 && w[3] > 0) w_.contact = w[3] / w[6];
+    if (windows_++ == 0) imbalance_initial_ = imb;
+    if (pending_after_) {
+      log_.back().imbalance_after = imb;
+      pending_after_ = false;
+    }
+    last_imbalance_ = imb;
+    window_start_ = steps_;
+    return imb;
+  }
+
+  // Moves the state in `s` (any distribution over the ranks) to its owners and installs the
+  // rank's new part. rebalance: a new partition from the measured costs first; otherwise the
+  // owners are re-read from the current partition at the current positions.
+  void redistribute(const StateSlice& s, bool rebalance) {
+    const std::int64_t nsv = static_cast<std::int64_t>(s.vertex.size());
+    if (rebalance || dec_.splitters.empty()) {
+      auto scope = timers_.scope("balance");
+      std::vector<double> cost(nsv);
+      for (std::int64_t k = 0; k < nsv; ++k) {
+        const std::int64_t gv = s.vertex[k];
+        cost[k] = w_.vertex + w_.tet * ix_.tets_at[gv] + (ix_.contact_vertex[gv] ? w_.contact : 0);
+      }
+      dec_ = balance(comm_, s.x, cost, curve_, opt_.max_cell_cost);
+      predicted_after_ = dec_.predicted_imbalance;
+    }
+    auto scope = timers_.scope("migration");
+    std::int64_t bytes = 0;
+    // New owners; every rank learns the changes (owner_ covers all free vertices).
+    std::vector<int> dest(nsv);
+    std::vector<std::pair<std::int64_t, std::int64_t>> changed;
+    for (std::int64_t k = 0; k < nsv; ++k) {
+      dest[k] = dec_.owner(s.x[k]);
+      if (owner_[s.vertex[k]] != dest[k]) changed.push_back({s.vertex[k], dest[k]});
+    }
+    for (const auto& [gv, r] : allgatherv(comm_, changed, &bytes))
+      owner_[gv] = static_cast<std::int32_t>(r);
+
+    // Vertices: x, v, dissipation (and the relaxation start state while relaxing).
+    int relax = !s.x0.empty(), any_relax = 0;
+    MPI_Allreduce(&relax, &any_relax, 1, MPI_INT, MPI_MAX, comm_);
+    std::vector<std::uint64_t> vg(s.vertex.begin(), s.vertex.end());
+    MigratePlan mv(comm_, dest, vg);
+    const std::int64_t nn = mv.n_new();
+    std::vector<Vec3> x(nn), v(nn), x0(any_relax ? nn : 0), f0(any_relax ? nn : 0);
+    std::vector<double> dv(nn);
+    std::vector<CommField> src{cfield(s.x), cfield(s.v), cfield(s.diss_v)},
+        dst{cfield(x), cfield(v), cfield(dv)};
+    std::vector<Vec3> zeros;
+    if (any_relax) {
+      if (s.x0.empty()) zeros.assign(nsv, Vec3{});
+      src.push_back(cfield(s.x0.empty() ? zeros : s.x0));
+      src.push_back(cfield(s.f0.empty() ? zeros : s.f0));
+      dst.push_back(cfield(x0));
+      dst.push_back(cfield(f0));
+    }
+    mv.begin(src);
+    mv.finish(dst);
+    bytes += mv.engine().last_bytes();
+
+    // Tets: from their holder to every new owner of one of their vertices.
+    const std::int64_t nst = static_cast<std::int64_t>(s.tet.size());
+    std::vector<std::int64_t> toff{0};
+    std::vector<int> tranks;
+    for (std::int64_t k = 0; k < nst; ++k) {
+      const auto& tv = g_->tets[s.tet[k]];
+      const std::size_t first = tranks.size();
+      for (int q = 0; q < 4; ++q) tranks.push_back(owner_[tv[q]]);
+      std::sort(tranks.begin() + first, tranks.end());
+      tranks.erase(std::unique(tranks.begin() + first, tranks.end()), tranks.end());
+      toff.push_back(static_cast<std::int64_t>(tranks.size()));
+    }
+    CommEngine te(comm_, toff, tranks, 0);
+    std::vector<std::int64_t> tg(te.n_recv());
+    std::vector<double> td(te.n_recv());
+    {
+      const CommField a[2] = {cfield(s.tet), cfield(s.diss_t)}, b[2] = {cfield(tg), cfield(td)};
+      te.begin(a, CommEngine::Dir::Forward);
+      te.finish(b, CommEngine::Dir::Forward);
+      bytes += te.last_bytes();
+    }
+
+    // Contact history: to every new owner of one of the entry's free vertices.
+    const std::int64_t nsh = static_cast<std::int64_t>(s.k1.size());
+    std::vector<std::int64_t> hoff{0};
+    std::vector<int> hranks;
+    for (std::int64_t k = 0; k < nsh; ++k) {
+      const std::size_t first = hranks.size();
+      for (int q = 0; q < 4; ++q)
+        if (s.kv[k][q] >= 0 && owner_[s.kv[k][q]] >= 0) hranks.push_back(owner_[s.kv[k][q]]);
+      std::sort(hranks.begin() + first, hranks.end());
+      hranks.erase(std::unique(hranks.begin() + first, hranks.end()), hranks.end());
+      hoff.push_back(static_cast<std::int64_t>(hranks.size()));
+    }
+    CommEngine he(comm_, hoff, hranks, 0);
+    StateSlice hist;
+    hist.k1.resize(he.n_recv());
+    hist.k2.resize(he.n_recv());
+    hist.xi.resize(he.n_recv());
+    hist.kv.resize(he.n_recv());
+    {
+      const CommField a[4] = {cfield(s.k1), cfield(s.k2), cfield(s.xi), cfield(s.kv)},
+                      b[4] = {cfield(hist.k1), cfield(hist.k2), cfield(hist.xi), cfield(hist.kv)};
+      he.begin(a, CommEngine::Dir::Forward);
+      he.finish(b, CommEngine::Dir::Forward);
+      bytes += he.last_bytes();
+    }
+    migrated_bytes_ += bytes;
+
+    // The new owned vertices in gid order, so a rank's layout depends only on what it owns.
+    std::vector<std::int64_t> perm(nn);
+    std::iota(perm.begin(), perm.end(), std::int64_t{0});
+    const auto& ng = mv.new_gids();
+    std::sort(perm.begin(), perm.end(), [&](auto a, auto b) { return ng[a] < ng[b]; });
+    StateSlice mine;
+    for (std::int64_t k : perm) {
+      mine.vertex.push_back(static_cast<std::int64_t>(ng[k]));
+      mine.x.push_back(x[k]);
+      mine.v.push_back(v[k]);
+      mine.diss_v.push_back(dv[k]);
+      if (any_relax) {
+        mine.x0.push_back(x0[k]);
+        mine.f0.push_back(f0[k]);
+      }
+    }
+    std::vector<std::int64_t> tperm(tg.size());
+    std::iota(tperm.begin(), tperm.end(), std::int64_t{0});
+    std::sort(tperm.begin(), tperm.end(), [&](auto a, auto b) { return tg[a] < tg[b]; });
+    for (std::int64_t k : tperm) {
+      mine.tet.push_back(tg[k]);
+      mine.diss_t.push_back(td[k]);
+    }
+    mine.k1 = std::move(hist.k1);
+    mine.k2 = std::move(hist.k2);
+    mine.xi = std::move(hist.xi);
+    mine.kv = std::move(hist.kv);
+    install(mine);
+  }
+
+  // Builds the rank's part from its owned state (vertices in gid order, the state of every
+  // tet it will hold, its contact history) and uploads it.
+  void install(const StateSlice& s) {
+    const Model& g = *g_;
+    LocalLayout L;
+    L.vertices = s.vertex;
+    L.n_owned = static_cast<std::int64_t>(s.vertex.size());
+    // Held tets: every free tet with an owned vertex; interior, boundary home, halo.
+    std::vector<std::int64_t> held;
+    for (std::int64_t gv : s.vertex)
+      held.insert(held.end(), ix_.vt.begin() + ix_.vt_off[gv], ix_.vt.begin() + ix_.vt_off[gv + 1]);
+    std::sort(held.begin(), held.end());
+    held.erase(std::unique(held.begin(), held.end()), held.end());
+    std::vector<std::int64_t> boundary, halo;
+    for (std::int64_t t : held) {
+      const auto& tv = g.tets[t];
+      bool all = true;
+      for (int q = 0; q < 4; ++q) all = all && owner_[tv[q]] == me_;
+      if (all)
+        L.tets.push_back(t);
+      else if (owner_[*std::min_element(tv.begin(), tv.end())] == me_)
+        boundary.push_back(t);
+      else
+        halo.push_back(t);
+    }
+    L.n_interior = static_cast<std::int64_t>(L.tets.size());
+    L.tets.insert(L.tets.end(), boundary.begin(), boundary.end());
+    L.n_home = static_cast<std::int64_t>(L.tets.size());
+    L.tets.insert(L.tets.end(), halo.begin(), halo.end());
+
+    // Contact band: the cells holding this rank's owned contact vertices, published to all.
+    std::unordered_map<std::uint64_t, std::vector<int>> occupied;  // cell -> other ranks
+    std::vector<std::uint64_t> my_cells;
+    n_contact_owned_ = 0;
+    if (contact_) {
+      for (std::int64_t i = 0; i < L.n_owned; ++i)
+        if (ix_.contact_vertex[s.vertex[i]]) {
+          my_cells.push_back(cell_key(s.x[i]));
+          ++n_contact_owned_;
+        }
+      std::sort(my_cells.begin(), my_cells.end());
+      my_cells.erase(std::unique(my_cells.begin(), my_cells.end()), my_cells.end());
+      std::vector<std::pair<std::uint64_t, std::int64_t>> mine;
+      for (auto c : my_cells) mine.push_back({c, me_});
+      for (const auto& [c, r] : allgatherv(comm_, mine))
+        if (r != me_) occupied[c].push_back(static_cast<int>(r));
+    }
+    std::unordered_map<std::uint64_t, std::vector<int>> near;  // cell -> ranks within the band
+    auto band_ranks = [&](Vec3 p) -> const std::vector<int>& {
+      const BandCell c = band_cell(p, band_);
+      const std::uint64_t key = band_key(c.i[0], c.i[1], c.i[2]);
+      auto it = near.find(key);
+      if (it != near.end()) return it->second;
+      std::vector<int> r;
+      for_each_band_neighbour(c, [&](std::uint64_t k) {
+        const auto o = occupied.find(k);
+        if (o != occupied.end()) r.insert(r.end(), o->second.begin(), o->second.end());
+      });
+      std::sort(r.begin(), r.end());
+      r.erase(std::unique(r.begin(), r.end()), r.end());
+      return near.emplace(key, std::move(r)).first->second;
+    };
+
+    // Halo: an owned vertex goes to the owners of its tets' other vertices (they hold those
+    // tets) and, for contact vertices, to the ranks with owned contact vertices in the band.
+    std::vector<std::int64_t> off{0};
+    std::vector<int> ranks;
+    for (std::int64_t i = 0; i < L.n_owned; ++i) {
+      const std::int64_t gv = s.vertex[i];
+      for (std::int64_t q = ix_.vt_off[gv]; q < ix_.vt_off[gv + 1]; ++q)
+        for (auto u : g.tets[ix_.vt[q]]) ranks.push_back(owner_[u]);
+      if (contact_ && ix_.contact_vertex[gv]) {
+        const auto& r = band_ranks(s.x[i]);
+        ranks.insert(ranks.end(), r.begin(), r.end());
+      }
+      off.push_back(static_cast<std::int64_t>(ranks.size()));
+    }
+    const std::vector<std::uint64_t> gids(s.vertex.begin(), s.vertex.end());
+    halo_.reset();
+    halo_ = std::make_unique<HaloPlan>(comm_, L.n_owned, off, ranks, gids);
+    for (auto gv : halo_->ghost_gids()) L.vertices.push_back(static_cast<std::int64_t>(gv));
+    L.n_free = static_cast<std::int64_t>(L.vertices.size());
+    // Fixed bodies' contact vertices in the band, from the model.
+    if (contact_) {
+      std::vector<std::int64_t> fixed;
+      for (auto c : my_cells) {
+        const BandCell bc{
+            {static_cast<std::int64_t>(c >> 42) - (std::int64_t{1} << 20),
+             static_cast<std::int64_t>((c >> 21) & 0x1fffff) - (std::int64_t{1} << 20),
+             static_cast<std::int64_t>(c & 0x1fffff) - (std::int64_t{1} << 20)}};
+        for_each_band_neighbour(bc, [&](std::uint64_t k) {
+          const auto f = fixed_cells_.find(k);
+          if (f != fixed_cells_.end())
+            fixed.insert(fixed.end(), f->second.begin(), f->second.end());
+        });
+      }
+      std::sort(fixed.begin(), fixed.end());
+      fixed.erase(std::unique(fixed.begin(), fixed.end()), fixed.end());
+      L.vertices.insert(L.vertices.end(), fixed.begin(), fixed.end());
+    }
+
+    // Positions and velocities: owned from the state, ghosts from their owners.
+    const std::int64_t nv = static_cast<std::int64_t>(L.vertices.size());
+    std::vector<Vec3> x(L.n_free), v(L.n_free);
+    std::copy(s.x.begin(), s.x.end(), x.begin());
+    std::copy(s.v.begin(), s.v.end(), v.begin());
+    {
+      const CommField f[2] = {comm_field(x), comm_field(v)};
+      halo_->gather_begin(f);
+      halo_->gather_finish(f);
+    }
+    for (std::int64_t i = L.n_free; i < nv; ++i) {
+      x.push_back(g.x[L.vertices[i]]);
+      v.push_back(g.v[L.vertices[i]]);
+    }
+    LocalModel lm = build_local_model(g, ix_, L, x, v);
+
+    // Keep the old contact stage's counters, then replace the rank's model.
+    for (const auto& [k, sec] : local_->stage_seconds()) contact_acc_[k] += sec;
+    if (contact_ && rebuilds_ > 0) {
+      std::map<std::string, double> c = local_->contact_stats();
+      overlap_acc_ = std::max(overlap_acc_, c["max_overlap_ever"]);
+      rebuilds_acc_ += c["pair_rebuilds"];
+    }
+    local_->upload(lm.model);
+    local_->use_preload(preload_);
+    BackendState st;
+    st.diss_v.assign(nv, 0.0);
+    std::copy(s.diss_v.begin(), s.diss_v.end(), st.diss_v.begin());
+    st.x0.assign(nv, Vec3{});
+    st.f0.assign(nv, Vec3{});
+    std::copy(s.x0.begin(), s.x0.end(), st.x0.begin());
+    std::copy(s.f0.begin(), s.f0.end(), st.f0.begin());
+    st.diss_t.resize(L.tets.size());
+    for (std::size_t j = 0; j < L.tets.size(); ++j) {
+      const auto it = std::lower_bound(s.tet.begin(), s.tet.end(), L.tets[j]);
+      if (it == s.tet.end() || *it != L.tets[j])
+        throw std::logic_error("distributed install: no state arrived for tet " +
+                               std::to_string(L.tets[j]));
+      st.diss_t[j] = s.diss_t[it - s.tet.begin()];
+    }
+    // Contact history in this rank's feature ids, sorted by key.
+    std::vector<std::size_t> hidx;
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> lk(s.k1.size());
+    for (std::size_t e = 0; e < s.k1.size(); ++e) {
+      lk[e] = {lm.ids.k1_to_local(s.k1[e]), FeatureIds::kNone};
+      if (lk[e].first != FeatureIds::kNone) lk[e].second = lm.ids.k2_to_local(s.k1[e], s.k2[e]);
+      if (lk[e].first != FeatureIds::kNone && lk[e].second != FeatureIds::kNone) hidx.push_back(e);
+    }
+    std::sort(hidx.begin(), hidx.end(), [&](auto a, auto b) { return lk[a] < lk[b]; });
+    hidx.erase(
+        std::unique(hidx.begin(), hidx.end(), [&](auto a, auto b) { return lk[a] == lk[b]; }),
+        hidx.end());
+    for (std::size_t e : hidx) {
+      st.contact.k1.push_back(lk[e].first);
+      st.contact.k2.push_back(lk[e].second);
+      st.contact.xi.push_back(s.xi[e]);
+      std::array<std::int32_t, 4> lv{-1, -1, -1, -1};
+      for (int q = 0; q < 4; ++q)
+        if (s.kv[e][q] >= 0) lv[q] = static_cast<std::int32_t>(lm.ids.local_vertex(s.kv[e][q]));
+      st.contact.v.push_back(lv);
+    }
+    local_->restore_state(st);
+    local_->set_halo(halo_->engine().send_index(), L.n_owned, halo_->n_ghost());
+    local_->mark_positions();
+    L_ = std::move(L);
+    ids_ = std::move(lm.ids);
+    ++rebuilds_;
+  }
+
+  MPI_Comm comm_ = MPI_COMM_NULL;
+  int me_ = 0, np_ = 1;
+  std::unique_ptr<Backend> local_;
+  ParallelOptions opt_;
+  Curve curve_;
+  const Model* g_ = nullptr;
+  ModelIndex ix_;
+  std::vector<std::int32_t> owner_;  // per global vertex: owner rank (-1: fixed body)
+  Decomposition dec_;
+  LocalLayout L_;
+  FeatureIds ids_;
+  std::unique_ptr<HaloPlan> halo_;
+  bool contact_ = false, preload_ = false, relaxing_ = false;
+  double band_ = 1, slack_ = 0;
+  std::unordered_map<std::uint64_t, std::vector<std::int64_t>> fixed_cells_;
+  std::int64_t n_contact_owned_ = 0;
+  std::vector<std::array<double, 6>> fixed_stress_;
+  std::vector<double> fixed_vm_;
+  // Records.
+  PhaseTimers timers_;
+  std::map<std::string, double> contact_acc_;
+  double overlap_acc_ = 0, rebuilds_acc_ = 0;
+  Weights w_;
+  double mark_[4] = {0, 0, 0, 0};
+  std::int64_t steps_ = 0, window_start_ = 0, windows_ = 0, rebuilds_ = 0, rebalances_ = 0;
+  double last_imbalance_ = 0, imbalance_initial_ = 0, predicted_after_ = 0;
+  bool pending_after_ = false;
+  std::vector<RebalanceEntry> log_;
+  std::int64_t migrated_bytes_ = 0, halo_bytes_ = 0, exchanges_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<DistributedBackend> make_distributed_backend(MPI_Comm comm,
+                                                             std::unique_ptr<Backend> local,
+                                                             const ParallelOptions& options) {
+  return std::make_unique<DistributedImpl>(comm, std::move(local), options);
+}
+
+std::unique_ptr<DistributedBackend> make_distributed_backend(std::unique_ptr<Backend> local,
+                                                             const ParallelOptions& options) {
+  return make_distributed_backend(MPI_COMM_WORLD, std::move(local), options);
+}
+
+}  // namespace qdemsph

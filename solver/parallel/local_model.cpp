@@ -1,0 +1,270 @@
+#include "parallel/local_model.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+#include "contact/contact_record.hpp"
+
+namespace qdemsph {
+
+namespace {
+
+// CSR of item -> list entries from (item, entry) incidences, entries in increasing order.
+template <class Visit>
+void build_csr(std::int64_t n_items, std::int64_t n_entries, Visit visit,
+               std::vector<std::int64_t>& off, std::vector<std::int32_t>& ent) {
+  off.assign(n_items + 1, 0);
+  for (std::int64_t e = 0; e < n_entries; ++e) visit(e, [&](std::int64_t i) { ++off[i + 1]; });
+  for (std::int64_t i = 0; i < n_items; ++i) off[i + 1] += off[i];
+  ent.assign(off[n_items], 0);
+  std::vector<std::int64_t> fill(off.begin(), off.end() - 1);
+  for (std::int64_t e = 0; e < n_entries; ++e)
+    visit(e, [&](std::int64_t i) { ent[fill[i]++] = static_cast<std::int32_t>(e); });
+}
+
+template <class T>
+std::int64_t find_sorted(const std::vector<T>& v, T x) {
+  const auto it = std::lower_bound(v.begin(), v.end(), x);
+  return it != v.end() && *it == x ? it - v.begin() : -1;
+}
+
+constexpr std::uint64_t kIdMask = (std::uint64_t{1} << 60) - 1;
+
+}  // namespace
+
+ModelIndex index_model(const Model& g) {
+  ModelIndex ix;
+  const std::int64_t nv = g.n_vertices(), nft = g.n_free_tets;
+  build_csr(
+      nv, nft,
+      [&](std::int64_t t, auto add) {
+        for (int k = 0; k < 4; ++k) add(g.tets[t][k]);
+      },
+      ix.vt_off, ix.vt);
+  ix.tets_at.assign(nv, 0);
+  for (std::int64_t t = 0; t < nft; ++t)
+    ++ix.tets_at[*std::min_element(g.tets[t].begin(), g.tets[t].end())];
+  ix.contact_vertex.assign(nv, 0);
+  ix.wall_vertex.assign(nv, 0);
+  const ContactModel& c = g.contact;
+  if (!c.enabled) return ix;
+  const std::int64_t np = static_cast<std::int64_t>(c.prim_v.size());
+  build_csr(
+      nv, np,
+      [&](std::int64_t p, auto add) {
+        for (int k = 0; k < 4; ++k)
+          if (c.prim_v[p][k] >= 0) add(c.prim_v[p][k]);
+      },
+      ix.vp_off, ix.vp);
+  for (std::int64_t p = 0; p < np; ++p) {
+    Vec3 ctr{0, 0, 0};
+    int n = 0;
+    for (int k = 0; k < 4 && c.prim_v[p][k] >= 0; ++k, ++n) {
+      ix.contact_vertex[c.prim_v[p][k]] = 1;
+      ctr += g.X[c.prim_v[p][k]];
+    }
+    ctr = ctr / static_cast<double>(n);
+    for (int k = 0; k < n; ++k)
+      ix.prim_radius = std::max(ix.prim_radius, norm(g.X[c.prim_v[p][k]] - ctr));
+  }
+  for (auto w : c.wall_vertices) ix.wall_vertex[w] = 1;
+  ix.tri_edges.resize(c.tri_v.size());
+  for (std::size_t s = 0; s < c.tri_v.size(); ++s)
+    for (int q = 0; q < 3; ++q) {
+      const std::int32_t a = c.tri_v[s][q], b = c.tri_v[s][(q + 1) % 3];
+      const std::array<std::int32_t, 2> e{std::min(a, b), std::max(a, b)};
+      ix.tri_edges[s][q] = static_cast<std::int32_t>(
+          std::lower_bound(c.edges.begin(), c.edges.end(), e) - c.edges.begin());
+    }
+  return ix;
+}
+
+void FeatureIds::finish() {
+  vertex_inv_.resize(vertex.size());
+  for (std::size_t i = 0; i < vertex.size(); ++i)
+    vertex_inv_[i] = {vertex[i], static_cast<std::int64_t>(i)};
+  std::sort(vertex_inv_.begin(), vertex_inv_.end());
+}
+
+std::int64_t FeatureIds::local_vertex(std::int64_t gid) const {
+  const auto it = std::lower_bound(vertex_inv_.begin(), vertex_inv_.end(),
+                                   std::pair<std::int64_t, std::int64_t>{gid, -1});
+  return it != vertex_inv_.end() && it->first == gid ? it->second : -1;
+}
+
+std::uint64_t FeatureIds::k1_to_global(std::uint64_t k1) const {
+  const int type = static_cast<int>(k1 >> 60);
+  const std::int64_t id = static_cast<std::int64_t>(k1 & kIdMask);
+  return contact_key1(type, static_cast<std::uint64_t>(type == kEdgeEdge ? edge[id] : vertex[id]));
+}
+
+std::uint64_t FeatureIds::k2_to_global(std::uint64_t k1, std::uint64_t k2) const {
+  const int type = static_cast<int>(k1 >> 60);
+  if (type == kPointFace) return static_cast<std::uint64_t>(triangle[k2]);
+  if (type == kEdgeEdge) return static_cast<std::uint64_t>(edge[k2]);
+  return k2;  // wall index
+}
+
+std::uint64_t FeatureIds::k1_to_local(std::uint64_t k1) const {
+  const int type = static_cast<int>(k1 >> 60);
+  const std::int64_t id = static_cast<std::int64_t>(k1 & kIdMask);
+  const std::int64_t l = type == kEdgeEdge ? find_sorted(edge, id) : local_vertex(id);
+  return l < 0 ? kNone : contact_key1(type, static_cast<std::uint64_t>(l));
+}
+
+std::uint64_t FeatureIds::k2_to_local(std::uint64_t k1, std::uint64_t k2) const {
+  const int type = static_cast<int>(k1 >> 60);
+  if (type == kWall) return k2;
+  const std::int64_t l =
+      find_sorted(type == kPointFace ? triangle : edge, static_cast<std::int64_t>(k2));
+  return l < 0 ? kNone : static_cast<std::uint64_t>(l);
+}
+
+LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& L,
+                             const std::vector<Vec3>& x, const std::vector<Vec3>& v,
+                             bool with_contact) {
+  const std::int64_t nv = static_cast<std::int64_t>(L.vertices.size());
+  if (static_cast<std::int64_t>(x.size()) != nv || static_cast<std::int64_t>(v.size()) != nv)
+    throw std::invalid_argument("build_local_model: x and v need one entry per listed vertex");
+  LocalModel out;
+  Model& m = out.model;
+  std::vector<std::int32_t> g2l(g.n_vertices(), -1);
+  auto local = [&](std::int64_t gid) {
+    const std::int32_t l = g2l[gid];
+    if (l < 0)
+      throw std::logic_error("build_local_model: vertex " + std::to_string(gid) +
+                             " of a held item is not in the layout");
+    return l;
+  };
+  for (std::int64_t i = 0; i < nv; ++i) {
+    const std::int64_t gi = L.vertices[i];
+    g2l[gi] = static_cast<std::int32_t>(i);
+    m.X.push_back(g.X[gi]);
+    m.fext.push_back(g.fext[gi]);
+    m.fpre.push_back(g.fpre[gi]);
+    m.mass.push_back(g.mass[gi]);
+    m.inv_mass.push_back(g.inv_mass[gi]);
+    m.relax_inv_mass.push_back(g.relax_inv_mass[gi]);
+    m.flags.push_back(g.flags[gi]);
+    m.gid.push_back(g.gid[gi]);
+    m.body.push_back(g.body[gi]);
+  }
+  m.x = x;
+  m.v = v;
+  for (const std::int64_t t : L.tets) {
+    std::array<std::int32_t, 4> tv;
+    for (int k = 0; k < 4; ++k) tv[k] = local(g.tets[t][k]);
+    m.tets.push_back(tv);
+    m.dX_inv.push_back(g.dX_inv[t]);
+    m.vol0.push_back(g.vol0[t]);
+    m.tet_material.push_back(g.tet_material[t]);
+    m.tet_gid.push_back(g.tet_gid[t]);
+  }
+  m.materials = g.materials;
+  m.bodies = g.bodies;
+  m.n_free_vertices = L.n_owned;
+  m.n_free_tets = static_cast<std::int64_t>(L.tets.size());
+  m.n_counted_tets = L.n_home;
+  m.gravity = g.gravity;
+  m.mass_damping = g.mass_damping;
+  m.relax_dt = g.relax_dt;
+  m.dt_critical = g.dt_critical;
+  m.dt_critical_tet = g.dt_critical_tet;
+  out.ids.vertex = L.vertices;
+
+  const ContactModel& gc = g.contact;
+  ContactModel& c = m.contact;
+  c.mode = gc.mode;
+  c.n_surface_tets = gc.n_surface_tets;
+  if (!with_contact || !gc.enabled) {
+    out.ids.finish();
+    return out;
+  }
+  c.enabled = true;
+  c.d_dem = gc.d_dem;
+  c.self_contact = gc.self_contact;
+  c.kn_factor = gc.kn_factor;
+  c.kt_ratio = gc.kt_ratio;
+  c.skin = gc.skin;
+  c.walls = gc.walls;
+  c.body_h = gc.body_h;
+  c.body_fixed = gc.body_fixed;
+  c.body_mat = gc.body_mat;
+  c.n_mat = gc.n_mat;
+  c.pair_mu = gc.pair_mu;
+  c.pair_zeta = gc.pair_zeta;
+  c.pair_kn = gc.pair_kn;
+  c.pair_E = gc.pair_E;
+  c.dt_limit = gc.dt_limit;
+
+  // Primitives with every vertex local, in global order (free bodies first).
+  std::vector<std::int32_t> prims;
+  for (std::int64_t i = 0; i < nv; ++i) {
+    const std::int64_t gi = L.vertices[i];
+    prims.insert(prims.end(), ix.vp.begin() + ix.vp_off[gi], ix.vp.begin() + ix.vp_off[gi + 1]);
+  }
+  std::sort(prims.begin(), prims.end());
+  prims.erase(std::unique(prims.begin(), prims.end()), prims.end());
+  std::erase_if(prims, [&](std::int32_t p) {
+    for (int k = 0; k < 4; ++k)
+      if (gc.prim_v[p][k] >= 0 && g2l[gc.prim_v[p][k]] < 0) return true;
+    return false;
+  });
+  // Their triangles and the triangles' edges, in global order.
+  std::vector<std::int64_t>& tris = out.ids.triangle;
+  for (std::int32_t p : prims)
+    for (std::int64_t q = gc.prim_tri_off[p]; q < gc.prim_tri_off[p + 1]; ++q)
+      tris.push_back(gc.prim_tri[q]);
+  std::sort(tris.begin(), tris.end());
+  tris.erase(std::unique(tris.begin(), tris.end()), tris.end());
+  std::vector<std::int64_t>& edges = out.ids.edge;
+  for (std::int64_t s : tris)
+    for (int q = 0; q < 3; ++q) edges.push_back(ix.tri_edges[s][q]);
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+
+  auto local_tri = [&](std::int64_t s) { return static_cast<std::int32_t>(find_sorted(tris, s)); };
+  auto local_edge = [&](std::int64_t e) {
+    return static_cast<std::int32_t>(find_sorted(edges, e));
+  };
+  c.own_v_off.push_back(0);
+  c.own_e_off.push_back(0);
+  for (std::int64_t s : tris) {
+    c.tri_v.push_back({local(gc.tri_v[s][0]), local(gc.tri_v[s][1]), local(gc.tri_v[s][2])});
+    c.tri_body.push_back(gc.tri_body[s]);
+    for (std::int64_t q = gc.own_v_off[s]; q < gc.own_v_off[s + 1]; ++q)
+      c.own_v.push_back(local(gc.own_v[q]));
+    for (std::int64_t q = gc.own_e_off[s]; q < gc.own_e_off[s + 1]; ++q)
+      c.own_e.push_back(local_edge(gc.own_e[q]));
+    c.own_v_off.push_back(static_cast<std::int64_t>(c.own_v.size()));
+    c.own_e_off.push_back(static_cast<std::int64_t>(c.own_e.size()));
+  }
+  for (std::int64_t e : edges) {
+    // Endpoints keep the global order (edge-edge geometry is evaluated a0 -> a1).
+    c.edges.push_back({local(gc.edges[e][0]), local(gc.edges[e][1])});
+    std::array<std::int32_t, 2> et{-1, -1};
+    for (int k = 0; k < 2; ++k)
+      if (gc.edge_tri[e][k] >= 0) et[k] = local_tri(gc.edge_tri[e][k]);
+    c.edge_tri.push_back(et);
+  }
+  c.prim_tri_off.push_back(0);
+  for (std::int32_t p : prims) {
+    std::array<std::int32_t, 4> pv{-1, -1, -1, -1};
+    for (int k = 0; k < 4; ++k)
+      if (gc.prim_v[p][k] >= 0) pv[k] = local(gc.prim_v[p][k]);
+    c.prim_v.push_back(pv);
+    c.prim_body.push_back(gc.prim_body[p]);
+    for (std::int64_t q = gc.prim_tri_off[p]; q < gc.prim_tri_off[p + 1]; ++q)
+      c.prim_tri.push_back(local_tri(gc.prim_tri[q]));
+    c.prim_tri_off.push_back(static_cast<std::int64_t>(c.prim_tri.size()));
+    if (!gc.body_fixed[gc.prim_body[p]])
+      c.n_free_prims = static_cast<std::int64_t>(c.prim_v.size());
+  }
+  for (std::int64_t i = 0; i < L.n_owned; ++i)
+    if (ix.wall_vertex[L.vertices[i]]) c.wall_vertices.push_back(static_cast<std::int32_t>(i));
+  out.ids.finish();
+  return out;
+}
+
+}  // namespace qdemsph

@@ -1,0 +1,86 @@
+// A rank's part of a distributed model (docs/parallel.md): the vertices and tets it holds,
+// renumbered locally, as a Model its backend uploads unchanged. Pure functions, no MPI: the
+// distributed backend (distributed_backend.cpp) decides what a rank holds, this file builds
+// it from the global model, which every rank keeps as the immutable description of the scene
+// (reference geometry, masses, loads, connectivity, contact topology). Only the dynamic state
+// (x, v, dissipation, contact history) moves between ranks.
+//
+// Local order:
+//   vertices  [owned free | free ghosts | fixed-body vertices]; the backend integrates and
+//             gathers forces for [0, n_owned) only (Model::n_free_vertices = n_owned), ghost
+//             x and v arrive by halo exchange, fixed bodies never move (x = X).
+//   tets      free tets only: [interior home | boundary home | halo]; interior tets have all
+//             four vertices owned (computed while the halo exchange is in flight), home tets
+//             count in the energies (Model::n_counted_tets = n_home), halo tets are the
+//             other ranks' tets with an owned vertex, computed here too so that every owned
+//             vertex gathers its complete force locally. The backend sums the corners of a
+//             vertex ordered by tet global id, so forces equal those of one rank bit for bit.
+//   contact   the primitives whose vertices are all local, in global order (free bodies
+//             first); their triangles, edges and feature ownership as in the global model.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/vec.hpp"
+#include "model/model.hpp"
+
+namespace qdemsph {
+
+// Lookups over the global model, built once per run on every rank.
+struct ModelIndex {
+  std::vector<std::int64_t> vt_off;  // vertex -> free tets containing it (CSR)
+  std::vector<std::int32_t> vt;
+  std::vector<std::int32_t> tets_at;  // free tets whose smallest vertex id is this vertex
+  std::vector<std::int64_t> vp_off;   // vertex -> contact primitives containing it (CSR)
+  std::vector<std::int32_t> vp;
+  std::vector<std::array<std::int32_t, 3>> tri_edges;  // surface triangle -> its edges
+  std::vector<std::uint8_t> contact_vertex;            // a vertex of some contact primitive
+  std::vector<std::uint8_t> wall_vertex;               // tested against walls
+  double prim_radius = 0;  // largest primitive radius (centroid to vertex) in the reference
+};
+
+ModelIndex index_model(const Model& global);
+
+// What a rank holds, as global ids in local order (see above).
+struct LocalLayout {
+  std::vector<std::int64_t> vertices;
+  std::int64_t n_owned = 0;  // owned free vertices first
+  std::int64_t n_free = 0;   // owned + free ghosts; fixed-body vertices after
+  std::vector<std::int64_t> tets;
+  std::int64_t n_interior = 0, n_home = 0;
+};
+
+// Local <-> global ids of the features contact keys use (contact_record.hpp: k1 = type << 60
+// | id1, k2 = id2; point-face (vertex, triangle), edge-edge (edge, edge), wall (vertex, wall)).
+// Triangles and edges are kept in global order, so translated keys sort the same way.
+class FeatureIds {
+ public:
+  std::vector<std::int64_t> vertex, triangle, edge;  // local -> global
+  void finish();                                     // builds the inverse lookups
+  std::uint64_t k1_to_global(std::uint64_t k1) const;
+  std::uint64_t k2_to_global(std::uint64_t k1, std::uint64_t k2) const;
+  // kNone when the feature is not held locally.
+  static constexpr std::uint64_t kNone = ~std::uint64_t{0};
+  std::uint64_t k1_to_local(std::uint64_t k1) const;
+  std::uint64_t k2_to_local(std::uint64_t k1, std::uint64_t k2) const;
+  std::int64_t local_vertex(std::int64_t gid) const;  // -1 when not local
+
+ private:
+  std::vector<std::pair<std::int64_t, std::int64_t>> vertex_inv_;  // (global, local) sorted
+};
+
+struct LocalModel {
+  Model model;
+  FeatureIds ids;
+};
+
+// The rank's Model. x and v are given for the listed vertices (ghost values may be stale:
+// the first halo exchange overwrites them); everything else comes from the global model.
+// with_contact = false leaves the contact stage out (used for output-only models).
+LocalModel build_local_model(const Model& global, const ModelIndex& index,
+                             const LocalLayout& layout, const std::vector<Vec3>& x,
+                             const std::vector<Vec3>& v, bool with_contact = true);
+
+}  // namespace qdemsph

@@ -1,0 +1,53 @@
+#include "parallel/parallel_record.hpp"
+
+namespace qdemsph {
+
+Json ParallelRecord::to_json() const {
+  Json j = Json::object();
+  j["ranks"] = ranks;
+  j["curve"] = curve;
+  j["rebalances"] = rebalances;
+  j["imbalance"] = imbalance;
+  j["imbalance_initial"] = imbalance_initial;
+  j["migrated_bytes"] = migrated_bytes;
+  j["halo_bytes_per_step"] = halo_bytes_per_step;
+  Json ov = Json::array(), ot = Json::array();
+  for (auto n : owned_vertices) ov.push_back(n);
+  for (auto n : owned_tets) ot.push_back(n);
+  j["owned_vertices"] = ov;
+  j["owned_tets"] = ot;
+  Json pmax = Json::object(), pmean = Json::object();
+  for (const char* p : kParallelPhases) {
+    const auto a = phases_max.find(p), b = phases_mean.find(p);
+    pmax[p] = a == phases_max.end() ? 0.0 : a->second;
+    pmean[p] = b == phases_mean.end() ? 0.0 : b->second;
+  }
+  j["phases_max"] = pmax;
+  j["phases_mean"] = pmean;
+  Json log = Json::array();
+  for (const RebalanceEntry& e : rebalance_log) {
+    Json r = Json::object();
+    r["step"] = e.step;
+    r["imbalance_before"] = e.imbalance_before;
+    r["imbalance_after"] = e.imbalance_after;
+    r["bytes"] = e.bytes;
+    log.push_back(r);
+  }
+  j["rebalance_log"] = log;
+  return j;
+}
+
+ParallelRecord serial_parallel_record(const Model& model, const std::string& curve,
+                                      const std::map<std::string, double>& phases) {
+  ParallelRecord r;
+  r.curve = curve;
+  r.owned_vertices = {model.n_free_vertices};
+  r.owned_tets = {model.n_free_tets};
+  for (const char* p : kParallelPhases) {
+    const auto it = phases.find(p);
+    r.phases_max[p] = r.phases_mean[p] = it == phases.end() ? 0.0 : it->second;
+  }
+  return r;
+}
+
+}  // namespace qdemsph

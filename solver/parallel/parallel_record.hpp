@@ -1,0 +1,54 @@
+// The `parallel` object of summary.json: the decomposition's records for the scaling sweeps
+// (scaling/ reads it; keep the keys). Written on every run: one rank reports ranks = 1, no
+// rebalancing and its own phase times.
+//
+//   ranks, curve, rebalances
+//   imbalance            max / mean - 1 over ranks of the busy time (elements, integration,
+//                        contact) of the last measurement window (rebalance_every steps)
+//   imbalance_initial    the same over the first window, before any rebalancing
+//   migrated_bytes       bytes sent between ranks by migrations (state, owners, history)
+//   halo_bytes_per_step  bytes sent by all ranks' halo exchanges per force evaluation
+//   owned_vertices, owned_tets   per rank: owned free vertices, home free tets (at the end)
+//   phases_max, phases_mean      per phase, seconds over ranks (kParallelPhases)
+//   rebalance_log        [{step, imbalance_before, imbalance_after, bytes}]; imbalance_after
+//                        is measured over the next window (or the rest of the run)
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "io/json.hpp"
+#include "model/model.hpp"
+
+namespace qdemsph {
+
+inline constexpr const char* kParallelPhases[] = {"elements", "integration", "contact", "sph",
+                                                  "halo",     "migration",   "balance", "output"};
+
+struct RebalanceEntry {
+  std::int64_t step = 0;
+  double imbalance_before = 0, imbalance_after = 0;
+  std::int64_t bytes = 0;
+};
+
+struct ParallelRecord {
+  int ranks = 1;
+  std::string curve = "hilbert";
+  std::int64_t rebalances = 0;
+  double imbalance = 0, imbalance_initial = 0;
+  std::int64_t migrated_bytes = 0;
+  double halo_bytes_per_step = 0;
+  std::vector<std::int64_t> owned_vertices, owned_tets;
+  std::map<std::string, double> phases_max, phases_mean;
+  std::vector<RebalanceEntry> rebalance_log;
+
+  Json to_json() const;
+};
+
+// One rank: the run's phase seconds (as in summary.json "phases", elements without contact).
+ParallelRecord serial_parallel_record(const Model& model, const std::string& curve,
+                                      const std::map<std::string, double>& phases);
+
+}  // namespace qdemsph
