@@ -45,6 +45,7 @@ namespace qdemsph {
 // Read-only topology views used by the narrow phase (trivially copyable).
 struct ContactTopology {
   View<const std::int32_t> tri_v;  // tri_v[k * ntri + s]
+  View<const std::uint64_t> vgid;  // vertex global ids: keys survive renumbering (MPI ranks)
   std::int64_t ntri = 0;
   View<const std::int32_t> tri_body, edge_v, edge_tri;  // edge_v/edge_tri[k * ne + e]
   Vec3CView tri_n;  // unit outward normal of each surface triangle, this step
@@ -91,7 +92,7 @@ struct ContactTopology {
           ContactRecord& r = out[n];
           r = ContactRecord{};
           r.type = kPointFace;
-          r.k1 = contact_key1(kPointFace, static_cast<std::uint64_t>(A));
+          r.k1 = contact_key1(kPointFace, vgid[A]);
           r.k2 = static_cast<std::uint64_t>(s2);
           r.v[0] = A;
           r.w[0] = 1;
@@ -218,6 +219,7 @@ class ContactStage {
     for (std::int64_t w = 0; w < nw_; ++w) wk[w] = c.walls[w].stiffness;
     wall_kn_.assign(wk);
     vertex_body_.assign(m.body);
+    vgid_.assign(m.gid);
     inv_mass_.assign(m.inv_mass);
     pc_.resize(np_);
     pr_.resize(np_);
@@ -269,7 +271,7 @@ class ContactStage {
            pc_.bytes() + pr_.bytes() + cnt_.bytes() + rec_.bytes() + ent_f_.bytes() +
            ent_v_.bytes() + vcnt_.bytes() + vcur_.bytes() + vent_.bytes() + pact_.bytes() +
            nact_.bytes() + pk1_.bytes() + pk2_.bytes() + pxi_.bytes() + nk1_.bytes() +
-           nk2_.bytes() + nxi_.bytes() + cells_.bytes() + pairs_.bytes();
+           nk2_.bytes() + nxi_.bytes() + cells_.bytes() + pairs_.bytes() + vgid_.bytes();
   }
 
   ContactTopology topology() const {
@@ -288,6 +290,7 @@ class ContactStage {
     t.own_e = own_e_.cview();
     t.prim_tri = prim_tri_.cview();
     t.body_h = body_h_.cview();
+    t.vgid = vgid_.cview();
     t.d_dem = d_dem_;
     t.self_contact = self_;
     return t;
@@ -449,6 +452,7 @@ class ContactStage {
     const auto wv = wall_v_.cview();
     const auto wall = wall_.cview();
     const auto vb = vertex_body_.cview();
+    const auto vg = vgid_.cview();
     const double d_dem = d_dem_;
     auto prim_contacts = QDEMSPH_LAMBDA(std::int64_t i, ContactRecord * out)->std::int64_t {
       std::int64_t n = 0;
@@ -473,7 +477,7 @@ class ContactStage {
           ContactRecord& r = out[n];
           r = ContactRecord{};
           r.type = kWall;
-          r.k1 = contact_key1(kWall, static_cast<std::uint64_t>(A));
+          r.k1 = contact_key1(kWall, vg[A]);
           r.k2 = static_cast<std::uint64_t>(w);
           r.v[0] = A;
           r.w[0] = 1;
@@ -683,6 +687,7 @@ class ContactStage {
   Buffer<std::int32_t> edge_tri_{S};
   Buffer<std::int32_t> tri_v_{S}, edge_v_{S}, prim_v_{S}, tri_body_{S}, prim_body_{S}, own_v_{S},
       own_e_{S}, prim_tri_{S}, wall_v_{S}, body_fixed_{S}, body_mat_{S}, vertex_body_{S};
+  Buffer<std::uint64_t> vgid_{S};
   Buffer<std::int64_t> own_v_off_{S}, own_e_off_{S}, prim_tri_off_{S}, cnt_{S};
   Buffer<double> body_h_{S}, pair_mu_{S}, pair_zeta_{S}, pair_kn_{S}, pair_E_{S}, wall_{S},
       wall_kn_{S}, inv_mass_{S}, pr_{S};

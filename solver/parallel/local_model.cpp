@@ -93,10 +93,12 @@ std::int64_t FeatureIds::local_vertex(std::int64_t gid) const {
   return it != vertex_inv_.end() && it->first == gid ? it->second : -1;
 }
 
+// Vertex features are keyed by global id already (ContactTopology::vgid): only edges and
+// triangles, numbered per model, are translated.
 std::uint64_t FeatureIds::k1_to_global(std::uint64_t k1) const {
   const int type = static_cast<int>(k1 >> 60);
-  const std::int64_t id = static_cast<std::int64_t>(k1 & kIdMask);
-  return contact_key1(type, static_cast<std::uint64_t>(type == kEdgeEdge ? edge[id] : vertex[id]));
+  if (type != kEdgeEdge) return k1;
+  return contact_key1(type, static_cast<std::uint64_t>(edge[k1 & kIdMask]));
 }
 
 std::uint64_t FeatureIds::k2_to_global(std::uint64_t k1, std::uint64_t k2) const {
@@ -110,7 +112,8 @@ std::uint64_t FeatureIds::k1_to_local(std::uint64_t k1) const {
   const int type = static_cast<int>(k1 >> 60);
   const std::int64_t id = static_cast<std::int64_t>(k1 & kIdMask);
   const std::int64_t l = type == kEdgeEdge ? find_sorted(edge, id) : local_vertex(id);
-  return l < 0 ? kNone : contact_key1(type, static_cast<std::uint64_t>(l));
+  if (l < 0) return kNone;
+  return type == kEdgeEdge ? contact_key1(type, static_cast<std::uint64_t>(l)) : k1;
 }
 
 std::uint64_t FeatureIds::k2_to_local(std::uint64_t k1, std::uint64_t k2) const {

@@ -54,7 +54,9 @@ struct LocalLayout {
 
 // Local <-> global ids of the features contact keys use (contact_record.hpp: k1 = type << 60
 // | id1, k2 = id2; point-face (vertex, triangle), edge-edge (edge, edge), wall (vertex, wall)).
-// Triangles and edges are kept in global order, so translated keys sort the same way.
+// Vertices are keyed by global id in every model; triangles and edges are numbered per model
+// in global order, so translated keys sort the same way, and the contact records of a rank
+// are in the same order as on one rank.
 class FeatureIds {
  public:
   std::vector<std::int64_t> vertex, triangle, edge;  // local -> global
