@@ -1,0 +1,154 @@
+// A rank's part of a distributed model (parallel/local_model.hpp), without MPI: the free
+// vertices of a model are split in two "ranks" by a plane; each part holds its owned vertices,
+// the tets touching them and their other vertices as ghosts (values copied from the whole
+// model, as the halo exchange would). The owned vertices' forces equal the whole model's bit
+// for bit, the home tets' strain energies add up to the whole model's, and contact keys
+// translate to global ids and back.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <set>
+
+#include "contact/contact_record.hpp"
+#include "integrate/backend.hpp"
+#include "parallel/local_model.hpp"
+#include "scene_fixture.hpp"
+
+namespace qdemsph {
+namespace {
+
+using testing::make_problem;
+
+const char* kScene = R"(
+run: {mode: dynamic, end_time: 1.0}
+gravity: [0, 0, -9.81]
+damping: {mass: 0.3}
+materials: {m: {law: svk, E: 1.0e6, nu: 0.3, density: 1000, viscosity: 20}}
+contact: {d_dem: 0.01}
+walls: [{point: [0, 0, -0.5], normal: [0, 0, 1]}]
+bodies:
+  - {name: a, material: m, mesh: {type: box, size: [0.6, 0.2, 0.2], cells: [6, 2, 2]},
+     velocity: [0, 0, -1], angular_velocity: [1, 2, 3]}
+  - {name: floor, material: m, fixed: true, mesh: {type: box, origin: [-0.2, -0.2, -0.2], size: [1, 0.6, 0.1], cells: [2, 2, 1]}}
+loads: [{type: point, body: a, at: [0.6, 0.2, 0.2], force: [1, 2, 3]}]
+)";
+
+// The layout of "rank" `side` (0: x < cut, 1: x >= cut), as the distributed backend builds it.
+LocalLayout layout_of(const Model& g, const ModelIndex& ix, int side, double cut) {
+  auto owner = [&](std::int64_t v) { return g.X[v].x < cut ? 0 : 1; };
+  LocalLayout L;
+  for (std::int64_t v = 0; v < g.n_free_vertices; ++v)
+    if (owner(v) == side) L.vertices.push_back(v);
+  L.n_owned = static_cast<std::int64_t>(L.vertices.size());
+  std::set<std::int64_t> held, ghosts;
+  for (std::int64_t i = 0; i < L.n_owned; ++i)
+    for (auto q = ix.vt_off[L.vertices[i]]; q < ix.vt_off[L.vertices[i] + 1]; ++q)
+      held.insert(ix.vt[q]);
+  std::vector<std::int64_t> interior, boundary, halo;
+  for (std::int64_t t : held) {
+    const auto& tv = g.tets[t];
+    bool all = true;
+    for (auto u : tv) {
+      all = all && owner(u) == side;
+      if (owner(u) != side) ghosts.insert(u);
+    }
+    (all                                                      ? interior
+     : owner(*std::min_element(tv.begin(), tv.end())) == side ? boundary
+                                                              : halo)
+        .push_back(t);
+  }
+  L.vertices.insert(L.vertices.end(), ghosts.begin(), ghosts.end());
+  L.n_free = static_cast<std::int64_t>(L.vertices.size());
+  for (std::int64_t v = g.n_free_vertices; v < g.n_vertices(); ++v) L.vertices.push_back(v);
+  L.tets = interior;
+  L.n_interior = static_cast<std::int64_t>(interior.size());
+  L.tets.insert(L.tets.end(), boundary.begin(), boundary.end());
+  L.n_home = static_cast<std::int64_t>(L.tets.size());
+  L.tets.insert(L.tets.end(), halo.begin(), halo.end());
+  return L;
+}
+
+TEST(LocalModel, TwoPartsGiveTheWholeModelsForcesBitForBit) {
+  auto pb = make_problem(kScene);
+  const Model& g = pb.model;
+  ASSERT_TRUE(g.contact.enabled);
+  const ModelIndex ix = index_model(g);
+  // Deform the body and lower it to within D_DEM of the floor, so that elements and contact
+  // both give forces.
+  Model moved = g;
+  for (std::int64_t i = 0; i < g.n_free_vertices; ++i)
+    moved.x[i] =
+        g.X[i] + Vec3{0.01 * g.X[i].y * g.X[i].z, -0.02 * g.X[i].x, 0.015 * g.X[i].x - 0.097};
+  pb.backend->upload(moved);
+  pb.backend->compute_forces(1e-4, g.mass_damping);
+  EXPECT_GT(pb.backend->contact_stats().at("active"), 0);
+  const HostFields whole = pb.backend->download(true);
+  const BackendState whole_state = pb.backend->save_state();
+  const Energies whole_e = pb.backend->energies();
+  // Forces are seen through a kick of dt = 1: v + f / m.
+  pb.backend->kick(1.0);
+  const HostFields whole_kicked = pb.backend->download(false);
+
+  Energies sum;
+  std::int64_t owned = 0, home = 0;
+  for (int side = 0; side < 2; ++side) {
+    const LocalLayout L = layout_of(g, ix, side, 0.3);
+    std::vector<Vec3> x, v;
+    for (auto gv : L.vertices) {
+      x.push_back(moved.x[gv]);
+      v.push_back(moved.v[gv]);
+    }
+    const LocalModel lm = build_local_model(g, ix, L, x, v);
+    EXPECT_EQ(lm.model.n_free_vertices, L.n_owned);
+    EXPECT_EQ(lm.model.n_counted_tets, L.n_home);
+    auto be = make_host_backend();
+    be->upload(lm.model);
+    be->compute_forces(1e-4, g.mass_damping);
+    const BackendState st = be->save_state();
+    const HostFields h = be->download(true);
+    const Energies e = be->energies();
+    be->kick(1.0);
+    const HostFields k = be->download(false);
+    std::int64_t bad = 0;
+    for (std::int64_t i = 0; i < L.n_owned; ++i) {
+      const std::int64_t gv = L.vertices[i];
+      bad += k.v[i].x != whole_kicked.v[gv].x || k.v[i].y != whole_kicked.v[gv].y ||
+             k.v[i].z != whole_kicked.v[gv].z || st.diss_v[i] != whole_state.diss_v[gv];
+    }
+    EXPECT_EQ(bad, 0) << "side " << side;
+    // Contact keys: edges and triangles translate to global ids and back; vertices are
+    // global already.
+    const FeatureIds& ids = lm.ids;
+    ASSERT_FALSE(ids.edge.empty());
+    for (std::size_t e = 0; e < ids.edge.size(); ++e) {
+      const std::uint64_t k1 = contact_key1(kEdgeEdge, e);
+      EXPECT_EQ(ids.k1_to_global(k1), contact_key1(kEdgeEdge, ids.edge[e]));
+      EXPECT_EQ(ids.k1_to_local(ids.k1_to_global(k1)), k1);
+      EXPECT_EQ(ids.k2_to_local(k1, ids.k2_to_global(k1, e)), e);
+    }
+    const std::uint64_t pf = contact_key1(kPointFace, static_cast<std::uint64_t>(L.vertices[0]));
+    EXPECT_EQ(ids.k1_to_global(pf), pf);
+    for (std::size_t t = 0; t < ids.triangle.size(); ++t)
+      EXPECT_EQ(ids.k2_to_local(pf, ids.k2_to_global(pf, t)), t);
+    EXPECT_EQ(ids.k1_to_local(contact_key1(kPointFace, 1u << 30)), FeatureIds::kNone);
+    for (std::int64_t j = 0; j < L.n_home; ++j) {
+      EXPECT_EQ(st.diss_t[j], whole_state.diss_t[L.tets[j]]);
+      EXPECT_EQ(h.von_mises[j], whole.von_mises[L.tets[j]]);
+    }
+    sum.kinetic += e.kinetic;
+    sum.strain += e.strain;
+    sum.potential += e.potential;
+    sum.dissipated += e.dissipated;
+    owned += L.n_owned;
+    home += L.n_home;
+  }
+  EXPECT_EQ(owned, g.n_free_vertices);
+  EXPECT_EQ(home, g.n_free_tets);
+  EXPECT_NEAR(sum.strain, whole_e.strain, 1e-12 * std::abs(whole_e.strain));
+  EXPECT_NEAR(sum.kinetic, whole_e.kinetic, 1e-12 * std::abs(whole_e.kinetic));
+  EXPECT_NEAR(sum.potential, whole_e.potential, 1e-12 * std::abs(whole_e.potential));
+  EXPECT_NEAR(sum.dissipated, whole_e.dissipated, 1e-12 * std::abs(whole_e.dissipated));
+}
+
+}  // namespace
+}  // namespace qdemsph
