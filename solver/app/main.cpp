@@ -63,11 +63,16 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (version->parsed()) {
+#ifdef QDEMSPH_HAVE_MPI
+      const char* mpi_note = "; mpi";  // `mpirun -np N qdemsph run` runs distributed
+#else
+      const char* mpi_note = "";
+#endif
 #ifdef QDEMSPH_HAVE_CUDA
-      fmt::print("qdemsph 0.1.0 (double precision; backends: cpu, cuda)\ngpu: {}\n",
+      fmt::print("qdemsph 0.1.0 (double precision; backends: cpu, cuda{})\ngpu: {}\n", mpi_note,
                  gpu_summary(gpu_info()));
 #else
-      fmt::print("qdemsph 0.1.0 (double precision; backends: cpu)\n");
+      fmt::print("qdemsph 0.1.0 (double precision; backends: cpu{})\n", mpi_note);
 #endif
       return 0;
     }

@@ -106,13 +106,18 @@ class Qdemsph:
     # fail on the summary's status, with the numbers in the report).
     RESULT_CODES = (0, 3, 4)
 
-    def _call(self, args, out: Path, ok_codes=(0,)):
+    def _call(self, args, out: Path, ok_codes=(0,), ranks=None):
         self.check()
         out.mkdir(parents=True, exist_ok=True)
         cmd = [str(self.binary), *map(str, args)]
+        env = None
+        if ranks:
+            cmd = mpirun_command(ranks) + cmd
+            env = {**os.environ, "OMPI_MCA_rmaps_base_oversubscribe": "1",
+                   "PMIX_MCA_pcompress_base_silence_warning": "1"}
         t0 = time.perf_counter()
         try:
-            proc = subprocess.run(cmd, capture_output=True, text=True, timeout=self.timeout_s)
+            proc = subprocess.run(cmd, capture_output=True, text=True, timeout=self.timeout_s, env=env)
         except subprocess.TimeoutExpired as e:
             raise QdemsphError(f"timed out after {self.timeout_s} s: {' '.join(cmd)}") from e
         wall = time.perf_counter() - t0
@@ -122,8 +127,10 @@ class Qdemsph:
             raise QdemsphError(f"exit code {proc.returncode}: {' '.join(cmd)}\n{_tail(proc.stderr or proc.stdout)}")
         return wall, log, proc.returncode
 
-    def run(self, scene, out, sets=()):
-        """Run a scene; returns RunResult. Extra `sets` are 'dotted.key=yaml_value' strings."""
+    def run(self, scene, out, sets=(), ranks=None):
+        """Run a scene; returns RunResult. Extra `sets` are 'dotted.key=yaml_value' strings.
+        ranks: run under `mpirun -np RANKS` (Open MPI; oversubscribed when the machine has fewer
+        cores), on one process otherwise."""
         scene, out = Path(scene), Path(out)
         args = ["run", scene, "--out", out, "--quiet"]
         if self.backend:
@@ -135,7 +142,7 @@ class Qdemsph:
         spath = out / "summary.json"
         if spath.exists():
             spath.unlink()
-        wall, log, code = self._call(args, out, ok_codes=self.RESULT_CODES)
+        wall, log, code = self._call(args, out, ok_codes=self.RESULT_CODES, ranks=ranks)
         if not spath.exists():
             raise QdemsphError(f"{spath} was not written (exit code {code}) by: qdemsph run {scene}\n{_tail(log)}")
         summary = json.loads(spath.read_text())
@@ -149,6 +156,20 @@ class Qdemsph:
         if not found:
             raise QdemsphError(f"qdemsph mesh {scene} wrote no .msh file into {out}")
         return found
+
+
+def mpirun_command(ranks):
+    """`mpirun -np RANKS` (Open MPI), allowed to oversubscribe the cores (and to run as root,
+    as CI containers do)."""
+    import shutil
+
+    exe = shutil.which("mpirun")
+    if exe is None:
+        raise QdemsphError("mpirun not found (install Open MPI: ci/install-deps.sh)")
+    cmd = [exe, "--oversubscribe", "-np", str(int(ranks))]
+    if hasattr(os, "geteuid") and os.geteuid() == 0:
+        cmd.insert(1, "--allow-run-as-root")
+    return cmd
 
 
 def write_scene_variant(template, dest, **replacements):
