@@ -11,13 +11,17 @@ distributed stepper cuts them (docs/parallel.md; sfc.py is the Python twin of so
   costs     per item: tets at their first vertex, vertices, SPH particles, with weights
             (seconds per item per step; default: the calibration measured on the dev machine)
   owner     of a vertex / particle: the rank owning the leaf that holds it
-  band      an owned item goes to every other rank that owns a leaf within L_cell of it
-            (the halo list of docs/parallel.md item 2) -> ghosts per rank, messages, neighbours
   halo tets a tet is held by every rank owning one of its vertices (home: owner of its
             smallest-id vertex) -> tets computed per rank (redundant work)
-  needed    ghost vertices a rank needs at least: vertices of its held tets it does not own
-
-L_cell = max(tet diameter, contact range, SPH support 2h), per scene (scene_lcell).
+  ghosts    vertices, as the distributed stepper sends them (parallel/distributed_backend.cpp
+            on the mpi branch): an owned vertex goes to the owners of its tets' other
+            vertices ("needed": the vertices of a rank's held tets it does not own) and, if it
+            is a contact vertex (on a body surface), to every rank owning a contact vertex in
+            the band cells within two cells of its own (band cells of width
+            B = 1.5 (2.5 r_prim + D_DEM), r_prim the largest surface-triangle radius).
+            SPH particles (not distributed yet): to every rank owning a leaf within the kernel
+            support 2h of the particle (the band of docs/parallel.md item 2).
+  -> ghosts per rank, messages, neighbours, the on/off-node split for nodes of 2..64 ranks.
 
   /usr/bin/python3 scaling/geometry.py SCENE.yaml --ranks 1,2,4,8 [--curve hilbert]
   /usr/bin/python3 scaling/geometry.py --sweep cubes-weak --backend cpu --ranks 1,2,...,512 --json OUT
@@ -139,20 +143,43 @@ def scene_lcell(scene: dict) -> dict:
     return {"L_cell": max(tet, contact, sph), "tet_diameter": tet, "contact_range": contact, "sph_support": sph}
 
 
+def contact_band(scene: dict) -> float:
+    """Band cell width of the stepper's contact halo: 1.5 (2.5 r_prim + D_DEM), r_prim the
+    largest centroid-to-vertex distance of a surface triangle (box faces: two right triangles
+    per hex face); 0 when the scene has no contact."""
+    bodies = box_bodies(scene)
+    if not (len(bodies) > 1 or scene.get("walls")):
+        return 0.0
+    r = 0.0
+    for _, size, cells in bodies:
+        h = np.asarray(size, float) / np.asarray(cells, float)
+        for a, b in ((h[0], h[1]), (h[0], h[2]), (h[1], h[2])):
+            tri = np.array([[0, 0], [a, 0], [a, b]])
+            r = max(r, float(np.max(np.linalg.norm(tri - tri.mean(0), axis=1))))
+    d = (scene.get("contact") or {}).get("d_dem")
+    if d is None:  # 0.1 x the smallest body's mean surface edge
+        d = 0.1 * min(float(np.mean(np.asarray(s, float) / np.asarray(c, float))) for _, s, c in bodies)
+    return 1.5 * (2.5 * r + float(d))
+
+
 class SceneItems:
     """All vertices (with tets, in body chunks) and SPH particles of a scene."""
 
     def __init__(self, scene: dict):
         self.bodies = box_bodies(scene)
         self.lcell = scene_lcell(scene)
-        pts, self.vert_offset, self.n_tets = [], [0], 0
+        self.band = contact_band(scene)
+        pts, surf, self.vert_offset, self.n_tets = [], [], [0], 0
         self._cache = {}
         for o, s, c in self.bodies:
             p, t = self._mesh(tuple(o), tuple(s), tuple(c))
             pts.append(p)
+            lo, hi = np.asarray(o, float), np.asarray(o, float) + np.asarray(s, float)
+            surf.append(np.any(np.isclose(p, lo, rtol=0, atol=1e-9) | np.isclose(p, hi, rtol=0, atol=1e-9), axis=1))
             self.vert_offset.append(self.vert_offset[-1] + len(p))
             self.n_tets += len(t)
         self.vertices = np.concatenate(pts) if pts else np.zeros((0, 3))
+        self.surface = (np.concatenate(surf) if surf else np.zeros(0, bool)) & (self.band > 0)
         self.particles = fluid_particles(scene["fluid"], scene.get("gravity")) if scene.get("fluid") else np.zeros((0, 3))
         self.lo = np.min(np.concatenate([self.vertices, self.particles]), axis=0)
         self.hi = np.max(np.concatenate([self.vertices, self.particles]), axis=0)
@@ -165,18 +192,18 @@ class SceneItems:
         p, t = self._cache[key]
         return p + np.asarray(o, float), t
 
-    def tet_chunks(self, max_tets=4_000_000):
-        """Global tet connectivity in chunks of whole bodies."""
-        buf, n = [], 0
+    def tet_chunks(self, max_tets=4_000_000, ranges=False):
+        """Global tet connectivity in chunks of whole bodies (with ranges: and the chunk's
+        vertex index range [v0, v1))."""
+        buf, n, v0 = [], 0, 0
         for bi, (o, s, c) in enumerate(self.bodies):
             _, t = self._cache[(tuple(s), tuple(c))]
             buf.append(t + self.vert_offset[bi])
             n += len(t)
-            if n >= max_tets:
-                yield np.concatenate(buf)
-                buf, n = [], 0
-        if buf:
-            yield np.concatenate(buf)
+            if n >= max_tets or bi == len(self.bodies) - 1:
+                v1 = self.vert_offset[bi + 1]
+                yield (np.concatenate(buf), v0, v1) if ranges else np.concatenate(buf)
+                buf, n, v0 = [], 0, v1
 
 
 def _band_destinations(grid, split, pts, own, L, chunk=1_000_000):
@@ -204,6 +231,37 @@ def _band_destinations(grid, split, pts, own, L, chunk=1_000_000):
     return np.concatenate(items) if items else np.zeros(0, int), np.concatenate(dests) if dests else np.zeros(0, int)
 
 
+def _band_cells(p, B):
+    c = np.floor(p / B).astype(np.int64) + (1 << 20)
+    return (c[:, 0] << 42) | (c[:, 1] << 21) | c[:, 2]
+
+
+def _expand(lo, cnt):
+    """Concatenated ranges [lo_i, lo_i + cnt_i)."""
+    start = np.repeat(lo - np.concatenate([[0], np.cumsum(cnt)[:-1]]), cnt)
+    return start + np.arange(int(cnt.sum()))
+
+
+def _contact_cell_ranks(pos, own, B):
+    """Sorted (cell key, rank) pairs: for every band cell holding a contact vertex, the ranks
+    owning a contact vertex in the 5^3 cells within two cells of it."""
+    keys = _band_cells(pos, B)
+    occ = np.unique(np.stack([keys, own.astype(np.int64)], 1), axis=0)  # (cell, owner), sorted
+    ok, orank = occ[:, 0], occ[:, 1]
+    cells = np.unique(keys)
+    out_c, out_r = [], []
+    for dx in range(-2, 3):
+        for dy in range(-2, 3):
+            for dz in range(-2, 3):
+                nb = cells + (dx << 42) + (dy << 21) + dz
+                lo = np.searchsorted(ok, nb, "left")
+                cnt = np.searchsorted(ok, nb, "right") - lo
+                m = cnt > 0
+                out_c.append(np.repeat(cells[m], cnt[m]))
+                out_r.append(orank[_expand(lo[m], cnt[m])])
+    return np.unique(np.stack([np.concatenate(out_c), np.concatenate(out_r)], 1), axis=0)
+
+
 def partition_geometry(scene: dict, nranks: int, curve="hilbert", weights=None, max_leaf=0.02,
                        ranks_per_node=(2, 4, 8), items: SceneItems | None = None) -> dict:
     """Per-rank counts of the partition of `scene` on `nranks` ranks (see the module doc)."""
@@ -228,36 +286,64 @@ def partition_geometry(scene: dict, nranks: int, curve="hilbert", weights=None, 
     pown = sfc.owner_of_key(split, pkeys)
     R = nranks
     out = {"ranks": R, "curve": curve, "grid_order": grid.order, "cell": grid.h, "leaves": int(len(lk)),
-           "L_cell": L, "lcell_parts": it.lcell, "weights": w,
+           "L_cell": L, "lcell_parts": it.lcell, "contact_band": it.band, "weights": w,
            "n_vertices": nv, "n_tets": it.n_tets, "n_particles": npart}
     out["owned_vertices"] = np.bincount(vown, minlength=R)
+    out["owned_surface_vertices"] = np.bincount(vown[it.surface], minlength=R)
     out["owned_particles"] = np.bincount(pown, minlength=R)
     # Tets: home (owner of the smallest-id vertex) and held (every owner of a vertex).
+    # Ghost vertices: (vertex, rank) pairs, needed by a held tet or sent by the contact band.
     home = np.zeros(R, np.int64)
     held = np.zeros(R, np.int64)
     needed = np.zeros(R, np.int64)
-    for t in it.tet_chunks():
+    ghosts = np.zeros(R, np.int64)
+    ghosts_surf = np.zeros(R, np.int64)
+    vd_all, vsrc_all = [], []
+    cr = _contact_cell_ranks(it.vertices[it.surface], vown[it.surface], it.band) if R > 1 and it.surface.any() else None
+    for t, v0, v1 in it.tet_chunks(ranges=True):
         o = vown[t]  # (m, 4)
         home += np.bincount(o[np.arange(len(t)), np.argmin(t, axis=1)], minlength=R)
         so = np.sort(o, axis=1)
         distinct = np.ones_like(so, dtype=bool)
         distinct[:, 1:] = so[:, 1:] != so[:, :-1]
         held += np.bincount(so[distinct], minlength=R)
-        if R > 1:  # (vertex b, owner of vertex a) with different owners: b is a ghost there
-            cross = ~np.all(o == o[:, :1], axis=1)
-            tc, oc = t[cross], o[cross]
-            pairs = [tc[m, b] * R + oc[m, a] for a in range(4) for b in range(4)
-                     for m in [oc[:, b] != oc[:, a]]]
-            if pairs:  # chunks hold whole bodies: a vertex never appears in two chunks
-                needed += np.bincount(np.unique(np.concatenate(pairs)) % R, minlength=R)
+        if R == 1:
+            continue
+        # vertex b of a tet is needed by the owner of vertex a when their owners differ
+        cross = ~np.all(o == o[:, :1], axis=1)
+        tc, oc = t[cross], o[cross]
+        need = [tc[m, b] * R + oc[m, a] for a in range(4) for b in range(4) for m in [oc[:, b] != oc[:, a]]]
+        need = np.unique(np.concatenate(need)) if need else np.zeros(0, np.int64)
+        needed += np.bincount(need % R, minlength=R)
+        pairs = [need]
+        if cr is not None:  # contact vertices of this chunk -> ranks in their band
+            sv = np.nonzero(it.surface[v0:v1])[0] + v0
+            if len(sv):
+                kc = _band_cells(it.vertices[sv], it.band)
+                lo = np.searchsorted(cr[:, 0], kc, "left")
+                cnt = np.searchsorted(cr[:, 0], kc, "right") - lo
+                vi = np.repeat(sv, cnt)
+                ri = cr[_expand(lo, cnt), 1]
+                keep = ri != vown[vi]
+                pairs.append(vi[keep] * R + ri[keep])
+        allp = np.unique(np.concatenate(pairs))  # a vertex is in one chunk only
+        dst = allp % R
+        src = vown[allp // R]
+        ghosts += np.bincount(dst, minlength=R)
+        ghosts_surf += np.bincount(dst[it.surface[allp // R]], minlength=R)
+        vd_all.append(dst)
+        vsrc_all.append(src)
     out["home_tets"], out["held_tets"] = home, held
     out["needed_ghost_vertices"] = needed
-    # Band ghosts (what the halo plans send).
-    vi, vd = _band_destinations(grid, split, it.vertices, vown, L) if nv and R > 1 else (np.zeros(0, int),) * 2
-    pi, pd = _band_destinations(grid, split, it.particles, pown, L) if npart and R > 1 else (np.zeros(0, int),) * 2
-    out["ghost_vertices"] = np.bincount(vd, minlength=R)
+    out["ghost_vertices"] = ghosts
+    out["ghost_surface_vertices"] = ghosts_surf
+    vd = np.concatenate(vd_all) if vd_all else np.zeros(0, np.int64)
+    vs = np.concatenate(vsrc_all) if vsrc_all else np.zeros(0, np.int64)
+    # SPH particles: the support band.
+    pi, pd = _band_destinations(grid, split, it.particles, pown, it.lcell["sph_support"]) if npart and R > 1 \
+        else (np.zeros(0, int),) * 2
     out["ghost_particles"] = np.bincount(pd, minlength=R)
-    src = np.concatenate([vown[vi], pown[pi]]).astype(np.int64)
+    src = np.concatenate([vs, pown[pi]]).astype(np.int64)
     dst = np.concatenate([vd, pd]).astype(np.int64)
     links = np.unique(src * R + dst)
     out["send_neighbours"] = np.bincount(links // R, minlength=R)

@@ -11,8 +11,15 @@ Time per step of rank r (the step ends when the slowest rank ends):
        + c_particle * (owned_particles_r + g * ghost_particles_r) + c_step
        held tets = home tets + halo tets (a tet is computed on every rank owning one of its
        vertices, docs/parallel.md item 1: redundant work at the cuts); pairs_r = pairs per
-       owned vertex x owned vertices (contact work follows the surface the rank owns);
-       g: the share of a particle's work a ghost costs (neighbour search, density), 0.5.
+       surface vertex x (owned + ghost surface vertices): a rank finds the candidate pairs
+       among all the surface it holds (on 2 ranks of the cube block the pairs per rank were
+       1.34 x the 1-rank pairs per 27 cubes, the surface held 1.26 x);
+       g: the share of a particle's work a ghost costs, 0.15 (a ghost is sorted into the cell
+       list; the density and force loops run over owned particles only).
+       Balancer: when max_r C_r / mean C - 1 exceeds the rebalance threshold (0.10, the
+       stepper's default), the pieces are re-cut on measured time and the compute becomes
+       mean C x (1 + the cut's own imbalance); below it (or with a static partition,
+       threshold None) the slowest rank's C_r stands.
   X_r  halo exchange, not hidden (overlap o in [0, 1] hides up to o C_r behind interior work):
        max(0, E [k_r a_intra + k'_r a_inter + b_intra_r / B_intra + b_inter_r / B_inter
               + stage] - o C_r)
@@ -105,31 +112,32 @@ NETWORKS = {
 
 @dataclass
 class Options:
-    vertex_bytes: float = 72.0    # x, v gathered (48 B) + contact force scattered back (24 B)
-    particle_bytes: float = 72.0  # x, v, rho, (p) gathered + rho / p refreshed for the force loop
-    exchanges: int = 2            # halo exchanges per step (each: one message per neighbour)
+    vertex_bytes: float = 48.0    # x, v per ghost and force evaluation (measured: 45.5 B per
+    #                               geometry-predicted ghost, 2 CPU ranks of the cube block)
+    particle_bytes: float = 112.0  # SPH (not distributed yet): x, v, rho, p, then rho, p again
+    exchanges: int = 1            # halo exchanges per step (each: one message per neighbour)
     overlap: float = 0.0          # share of the compute that can hide communication (0: none)
     jitter: float = 0.01          # s: relative std. deviation of a rank's step time
-    ghost_particle_work: float = 0.5
+    ghost_particle_work: float = 0.15  # ghosts are binned/sorted; density and forces loop over owned
+    rebalance_threshold: float | None = 0.10  # the stepper's default; None: static partition
     allreduces: int = 1
     rebalance_interval: int = 0   # steps between rebalances (0: none)
     migrated_bytes: float = 0.0   # per rebalance, per rank
-    pairs_per_vertex: float = 0.0
+    pairs_per_surface_vertex: float = 0.0
 
 
-def _terms(geo: dict, r: int, costs: Costs, net: Network, opt: Options) -> dict:
-    """Compute and exchange seconds of rank r of one geometry row."""
+def _terms(geo: dict, r: int, costs: Costs, net: Network, opt: Options, N: int) -> dict:
+    """Compute and exchange seconds of rank r of one geometry row, on N ranks in all."""
     g = lambda k: float(geo[k][r]) if k in geo and len(geo[k]) > r else 0.0  # noqa: E731
     C = (costs.tet * g("held_tets") + costs.vertex * g("owned_vertices")
-         + costs.pair * opt.pairs_per_vertex * g("owned_vertices")
+         + costs.pair * opt.pairs_per_surface_vertex * (g("owned_surface_vertices") + g("ghost_surface_vertices"))
          + costs.particle * (g("owned_particles") + opt.ghost_particle_work * g("ghost_particles")) + costs.step)
-    N = geo["ranks"]
     if N == 1:
         return {"compute": C, "exchange": 0.0, "exchange_raw": 0.0}
     rpn = net.ranks_per_node
     gv, gp = g("ghost_vertices"), g("ghost_particles")
     off_key = f"_offnode_rpn{rpn}"
-    if N <= rpn:
+    if N <= rpn:  # one node
         gv_off = gp_off = k_off = 0.0
     elif "ghost_vertices" + off_key in geo:
         gv_off, gp_off, k_off = g("ghost_vertices" + off_key), g("ghost_particles" + off_key), g("recv_neighbours" + off_key)
@@ -148,11 +156,28 @@ def _terms(geo: dict, r: int, costs: Costs, net: Network, opt: Options) -> dict:
 
 
 def step_time(geo: dict, costs: Costs, net: Network, opt: Options) -> dict:
-    """Predicted time per step for one geometry row (geometry.py output for N ranks)."""
+    """Predicted time per step for one geometry row (geometry.py output for N ranks). An
+    extrapolated row (extend_rows) holds candidate rows of smaller N: each is evaluated as if
+    on N ranks (latencies, jitter, allreduce of N) and the slowest is the prediction."""
+    if geo.get("candidates"):
+        outs = [step_time(dict(c, ranks=geo["ranks"], _per_rank_of=c["ranks"]), costs, net, opt)
+                for c in geo["candidates"]]
+        worst = max(outs, key=lambda o: o["step_s"])
+        return dict(worst, geometry_from_ranks=worst.get("geometry_from_ranks"))
     N = int(geo["ranks"])
-    per = [_terms(geo, r, costs, net, opt) for r in range(N)]
-    crit = max(range(N), key=lambda r: per[r]["compute"] + per[r]["exchange"])
-    busy = per[crit]["compute"] + per[crit]["exchange"]
+    n_rows = int(geo.get("_per_rank_of", N))  # per-rank lists of a smaller N (extrapolation)
+    per = [_terms(geo, r, costs, net, opt, N) for r in range(n_rows)]
+    mean_c = sum(p["compute"] for p in per) / n_rows
+    crit = max(range(n_rows), key=lambda r: per[r]["compute"] + per[r]["exchange"])
+    xmax = max(range(n_rows), key=lambda r: per[r]["exchange"])
+    static_imb = max(p["compute"] for p in per) / mean_c - 1 if mean_c > 0 else 0.0
+    if opt.rebalance_threshold is not None and static_imb > opt.rebalance_threshold:
+        # The balancer re-cuts on measured time (redundant halo tets and ghost work included):
+        # the compute evens out to the cut's granularity (the partition's own imbalance).
+        compute = mean_c * (1 + float(geo.get("imbalance_partition", 0.0)))
+        busy, xr, balanced = compute + per[xmax]["exchange"], xmax, True
+    else:  # static partition, or an imbalance below the threshold (no rebalance triggered)
+        compute, busy, xr, balanced = per[crit]["compute"], per[crit]["compute"] + per[crit]["exchange"], crit, False
     jit = opt.jitter * math.sqrt(2 * math.log(N)) if N > 1 else 0.0
     lat_ar = net.intra_latency if N <= net.ranks_per_node else net.inter_latency
     ar = opt.allreduces * math.ceil(math.log2(N)) * lat_ar if N > 1 else 0.0
@@ -160,14 +185,14 @@ def step_time(geo: dict, costs: Costs, net: Network, opt: Options) -> dict:
     if opt.rebalance_interval > 0 and N > 1:
         bwm = net.intra_bandwidth if N <= net.ranks_per_node else net.inter_bandwidth
         reb = (opt.migrated_bytes / bwm + N * lat_ar) / opt.rebalance_interval
-    mean_c = sum(p["compute"] for p in per) / N
     T = busy * (1 + jit) + ar + reb
-    return {"ranks": N, "step_s": T, "critical_rank": crit, "compute_s": per[crit]["compute"],
-            "compute_mean_s": mean_c, "exchange_s": per[crit]["exchange"],
-            "exchange_raw_s": per[crit]["exchange_raw"], "latency_s": per[crit].get("latency", 0.0),
-            "bandwidth_s": per[crit].get("bandwidth", 0.0), "staging_s": per[crit].get("staging", 0.0),
-            "halo_bytes_per_exchange": per[crit].get("bytes", 0.0), "jitter_s": busy * jit, "allreduce_s": ar,
-            "rebalance_s": reb, "imbalance": per[crit]["compute"] / mean_c - 1 if mean_c > 0 else 0.0}
+    x = per[xr]
+    return {"ranks": N, "geometry_from_ranks": n_rows, "step_s": T, "critical_rank": xr, "compute_s": compute,
+            "compute_mean_s": mean_c, "exchange_s": x["exchange"], "exchange_raw_s": x["exchange_raw"],
+            "latency_s": x.get("latency", 0.0), "bandwidth_s": x.get("bandwidth", 0.0),
+            "staging_s": x.get("staging", 0.0), "halo_bytes_per_exchange": x.get("bytes", 0.0),
+            "jitter_s": busy * jit, "allreduce_s": ar, "rebalance_s": reb, "rebalanced": balanced,
+            "imbalance_static": static_imb, "imbalance": compute / mean_c - 1 if mean_c > 0 else 0.0}
 
 
 def predict(rows: list[dict], costs: Costs, net: Network, opt: Options, refs=(1, 8)) -> list[dict]:
@@ -181,24 +206,21 @@ def predict(rows: list[dict], costs: Costs, net: Network, opt: Options, refs=(1,
     return out
 
 
-def extend_rows(rows: list[dict], ranks: list[int]) -> list[dict]:
-    """Geometry rows for rank counts beyond the computed ones: the per-rank counts of the
-    largest computed N, repeated (weak scaling: pieces keep their size; the worst piece's halo
-    is assumed not to grow further). Marked extrapolated."""
+def extend_rows(rows: list[dict], ranks: list[int], min_candidate: int = 16) -> list[dict]:
+    """Geometry rows for rank counts beyond the computed ones. A weak-scaling piece keeps its
+    size, but the worst piece's halo wanders with N (the cuts fall differently through the
+    bodies), so an extrapolated N gets every computed row with N >= min_candidate (or the
+    largest) as candidates, and step_time takes the slowest: a conservative envelope."""
     have = {g["ranks"]: g for g in rows}
+    top = max(have)
+    cands = [have[n] for n in sorted(have) if n >= min_candidate] or [have[top]]
     out = [have[n] for n in sorted(have)]
-    top = have[max(have)]
     for n in ranks:
         if n in have:
             continue
-        if n < max(have):
+        if n < top:
             raise ValueError(f"no geometry row for N={n} (between computed rank counts)")
-        g = {"ranks": n, "extrapolated": True, "from_ranks": top["ranks"]}
-        for k, v in top.items():
-            if isinstance(v, list) and len(v) == top["ranks"]:
-                srt = sorted(v)  # repeat the distribution: the same quantiles over n ranks
-                g[k] = [srt[min(len(srt) - 1, (i * len(srt)) // n)] for i in range(n)]
-        out.append(g)
+        out.append({"ranks": n, "extrapolated": True, "candidates": cands})
     return sorted(out, key=lambda g: g["ranks"])
 
 
@@ -231,7 +253,9 @@ def costs_from_record(rec: dict) -> dict:
         c["vertex"] = ph.get("integration", 0.0) / max(it.get("vertices", 0), 1)
     if it.get("contact_pairs"):
         c["pair"] = ph.get("contact", 0.0) / it["contact_pairs"]
-        c["pairs_per_vertex"] = it["contact_pairs"] / max(it.get("vertices", 1), 1)
+        # closed triangulated surfaces: V = T / 2 + 2 per body
+        surf = it.get("surface_triangles", 0) / 2 + 2 * (rec.get("size", {}).get("bodies") or 0)
+        c["pairs_per_surface_vertex"] = it["contact_pairs"] / max(surf, 1)
     if it.get("particles"):
         c["particle"] = ph.get("sph", 0.0) / it["particles"]
     c["step"] = ph.get("checks", 0.0)
@@ -246,7 +270,7 @@ def calibrate(records: list[dict]) -> dict:
         c = costs_from_record(rec)
         it = rec.get("items") or {}
         weight = {"tet": it.get("tets"), "vertex": it.get("vertices"), "pair": it.get("contact_pairs"),
-                  "particle": it.get("particles"), "step": 1, "pairs_per_vertex": it.get("contact_pairs")}
+                  "particle": it.get("particles"), "step": 1, "pairs_per_surface_vertex": it.get("contact_pairs")}
         for k, v in c.items():
             w = weight.get(k) or 1e30  # bench records: take them
             if k not in best or w > best[k][1]:
@@ -271,9 +295,11 @@ def main(argv=None):
     p.add_argument("--costs", default="cpu-core-devvm")
     p.add_argument("--network", default="cpu-shm", choices=list(NETWORKS))
     p.add_argument("--ranks", default="1,2,4,8,16,32,64,128,256,512")
-    p.add_argument("--pairs-per-vertex", type=float, default=None, help="default: from costs.json for the case")
+    p.add_argument("--pairs-per-surface-vertex", type=float, default=None, help="default: costs.json, by sweep")
     p.add_argument("--overlap", type=float, default=0.0)
     p.add_argument("--jitter", type=float, default=0.01)
+    p.add_argument("--threshold", type=float, default=0.10, help="rebalance threshold (the stepper's default 0.10)")
+    p.add_argument("--static", action="store_true", help="static partition (no rebalancing)")
     p.add_argument("--json", help="write the prediction here")
     c = sub.add_parser("calibrate", help="per-item costs from single-rank run records / bench records")
     c.add_argument("records", nargs="+")
@@ -296,10 +322,10 @@ def main(argv=None):
             if a.source:
                 entry["source"] = a.source
             doc["costs"][a.name] = entry
-            for rec in recs:  # contact density of each case (pairs per vertex), machine-independent
+            for rec in recs:  # contact density of each case, machine-independent
                 cr = costs_from_record(rec) if rec.get("sweep") else {}
-                if "pairs_per_vertex" in cr:
-                    doc.setdefault("pairs_per_vertex", {})[rec["sweep"]] = cr["pairs_per_vertex"]
+                if "pairs_per_surface_vertex" in cr:
+                    doc.setdefault("pairs_per_surface_vertex", {})[rec["sweep"]] = cr["pairs_per_surface_vertex"]
             path.write_text(json.dumps(doc, indent=1) + "\n")
             print(f"stored as '{a.name}' in {path}")
         return 0
@@ -308,13 +334,15 @@ def main(argv=None):
     ranks = [int(x) for x in a.ranks.split(",")]
     rows = extend_rows(geo["rows"], ranks)
     rows = [r for r in rows if r["ranks"] in ranks]
-    ppv = a.pairs_per_vertex
+    ppv = a.pairs_per_surface_vertex
     if ppv is None:
-        ppv = json.loads((HERE / "costs.json").read_text()).get("pairs_per_vertex", {}).get(geo.get("sweep") or "", 0.0)
-    opt = Options(overlap=a.overlap, jitter=a.jitter, pairs_per_vertex=ppv)
+        ppv = json.loads((HERE / "costs.json").read_text()).get("pairs_per_surface_vertex", {}).get(geo.get("sweep") or "", 0.0)
+    opt = Options(overlap=a.overlap, jitter=a.jitter, pairs_per_surface_vertex=ppv,
+                  rebalance_threshold=None if a.static else a.threshold)
     pred = predict(rows, costs, NETWORKS[a.network], opt)
     print(f"PREDICTION (model, not a measurement): {geo.get('sweep')} ({geo.get('backend_preset')} preset), "
-          f"costs {a.costs}, network {a.network}, overlap {a.overlap}, jitter {a.jitter}")
+          f"costs {a.costs}, network {a.network}, overlap {a.overlap}, jitter {a.jitter}, "
+          f"{'static partition' if a.static else f'rebalance threshold {a.threshold}'}")
     print(f"{'N':>5} {'ms/step':>9} {'compute':>9} {'exch':>8} {'lat':>7} {'bw':>7} {'stage':>7} {'imb %':>6} {'E vs 1':>7} {'E vs 8':>7}")
     for o in pred:
         print(f"{o['ranks']:5d} {o['step_s'] * 1e3:9.3f} {o['compute_s'] * 1e3:9.3f} {o['exchange_s'] * 1e3:8.3f} "

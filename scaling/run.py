@@ -19,9 +19,13 @@ Launch (stated in every record under `launch`):
   none     the binary directly (one rank; the single-rank calibration runs).
 
 Time per step. `step_s` = sum over the top-level phases of summary.json (per-rank mean
-`parallel.phases_mean` when distributed, else `phases`), "output" excluded, / steps: the
-stepping loop without the first/last field snapshots and without the set-up (mesh build,
-partition, upload). `wall_s` is the whole process. Efficiency (report.py) uses step_s.
+`parallel.phases_mean` when distributed, else `phases`) without "output", "migration" and
+"balance", / steps: the stepping loop (elements, integration, contact, sph, halo exchange)
+without field snapshots, set-up, and (re)partitioning, whose first instance (moving every
+item from its start slice to its owner) is set-up counted in those phases. `step_s_all`
+adds "migration" and "balance" (what the balancer costs: the balancer comparison uses it,
+over runs long enough to amortise the first distribution). `wall_s` is the whole process.
+Weak/strong efficiency (report.py) uses step_s.
 
 A run on N > 1 ranks whose summary.json has no `parallel.ranks == N` ran N independent
 copies (a binary without the distributed stepper): it is recorded as status
@@ -77,7 +81,7 @@ def machine_facts(qdemsph: str) -> dict:
             "gpus": gpus, "gpu_topology": topo, "mpirun": sh(["mpirun", "--version"]).split("\n")[0],
             "qdemsph": sh([qdemsph, "version"]).split("\n")[0],
             "revision": os.environ.get("QDEMSPH_REVISION") or sh(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"]),
-            "kernel": platform.release()}
+            "kernel": platform.release(), "loadavg_before": list(os.getloadavg())}
 
 
 def scene_dt(qdemsph: str, scene_path: Path) -> float:
@@ -127,17 +131,21 @@ def launch_command(launcher: str, ranks: int, threads: int, backend: str, cores:
     return cmd + extra, env, facts
 
 
+NOT_STEP = ("output", "migration", "balance")  # not in step_s (step_s_all has the last two)
+
+
 def step_seconds(summary: dict) -> dict:
     par = summary.get("parallel") or {}
     src = par.get("phases_mean") or summary.get("phases") or {}
     top = {k: float(v) for k, v in src.items() if "." not in k}
     steps = max(int(summary.get("steps") or 0), 1)
-    loop = sum(v for k, v in top.items() if k != "output")
-    out = {"step_s": loop / steps, "phases_per_step": {k: v / steps for k, v in top.items()},
+    loop = sum(v for k, v in top.items() if k not in NOT_STEP)
+    out = {"step_s": loop / steps, "step_s_all": (loop + top.get("migration", 0.0) + top.get("balance", 0.0)) / steps,
+           "phases_per_step": {k: v / steps for k, v in top.items()},
            "phase_source": "parallel.phases_mean" if par.get("phases_mean") else "phases"}
     if par.get("phases_max"):
         out["phases_max_per_step"] = {k: float(v) / steps for k, v in par["phases_max"].items() if "." not in k}
-        out["step_s_maxsum"] = sum(v for k, v in out["phases_max_per_step"].items() if k != "output")
+        out["step_s_maxsum"] = sum(v for k, v in out["phases_max_per_step"].items() if k not in NOT_STEP)
     return out
 
 
@@ -148,7 +156,7 @@ def make_record(meta, launch, summary, facts, run_wall, status, note="") -> dict
            "backend": launch["backend"], "threads_per_rank": launch["threads_per_rank"], "launch": launch,
            "size": {k: meta[k] for k in ("n_tets", "n_vertices", "n_particles", "bodies", "layout")},
            "preset": meta["preset"], "preset_params": meta["preset_params"], "status": status, "note": note,
-           "process_wall_s": run_wall, "machine": facts}
+           "process_wall_s": run_wall, "loadavg_after": list(os.getloadavg()), "machine": facts}
     if summary:
         rec["summary"] = {k: summary.get(k) for k in ("wall_s", "steps", "sim_time", "dt", "n_tets", "n_vertices",
                                                        "backend", "threads", "status", "phases", "contact", "fluid")}
@@ -181,8 +189,9 @@ def run_sweep(a) -> list[dict]:
     facts = machine_facts(qd)
     cores = facts["usable_cores"]
     threads = a.threads or (max(1, cores // max(ranks)) if a.backend == "cuda" else 1)
-    # dt: once, from the smallest scene, fixed for every run of the sweep.
-    s0, m0 = scenes.scene_for(a.sweep, min(ranks), a.backend, variants[0])
+    # dt: once, from the 1-rank scene (weak: the same local geometry at every N; strong: the
+    # same scene), fixed for every run of the sweep.
+    s0, m0 = scenes.scene_for(a.sweep, 1, a.backend)
     p0 = work / f"{a.sweep}_{a.backend}_dt.yaml"
     p0.write_text(scenes.dump(s0))
     dt_fixed = scene_dt(qd, p0)
@@ -261,6 +270,10 @@ def run_sweep(a) -> list[dict]:
             if status == "not-distributed":
                 print("  stopping: this binary has no distributed stepper", flush=True)
                 return records
+            if status != "ok" and not a.keep_going:
+                print(f"  stopping the sweep after a run that {status} (larger runs would too; --keep-going runs them)",
+                      flush=True)
+                return records
     return records
 
 
@@ -280,6 +293,7 @@ def main(argv=None):
     ap.add_argument("--out", required=True, help="records go to OUT/records/")
     ap.add_argument("--work", help="scenes and run folders (default OUT/runs)")
     ap.add_argument("--repeat", type=int, default=1, help="run each point R times, keep the fastest (all step times recorded)")
+    ap.add_argument("--keep-going", action="store_true", help="go on after a failed or timed-out run")
     ap.add_argument("--keep", action="store_true", help="keep fields.h5 / fluid.h5 of the runs")
     a = ap.parse_args(argv)
     recs = run_sweep(a)

@@ -16,6 +16,9 @@ same) and their strong-scaling twins (one fixed problem on more ranks):
   topple    rows of box dominoes (0.3 x 1.0 x 2.0 m, 768 tets, pitch 0.8 m) on a floor, every
             4th one pushed over at the start so that toppling fronts run all along the rows;
             the rows lengthened with the rank count: contact-heavy and moving.
+  slide-balance: a block of cubes (2 high) sliding at 6 m/s along a floor into an end wall
+            1.5 m ahead (hit at ~0.27 s, run 0.45 s), on a fixed rank count with the load balancer on and off: the load
+            crosses the domain, so the first cut goes stale (solids only: runs today).
   dambreak-balance: a coarse dam break in a closed tank, run long enough (0.6 s) for the surge
             to cross it, on a fixed rank count with the load balancer on and off (static
             partition).
@@ -29,17 +32,24 @@ report); strong E(N) = N_ref t(N_ref) / (N t(N)).
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import sys
 
-import yaml
+try:  # PyYAML for readable scenes; without it (bare GPU machines) JSON, which is YAML too
+    import yaml
+except ImportError:
+    yaml = None
 
 # The scene keys of the distributed stepper's `parallel:` block used by the sweeps (one
-# place, so that a renamed key is one edit). `static` switches rebalancing off.
+# place, so that a renamed key is one edit; docs/scene-format.md on the mpi branch: curve,
+# rebalance_threshold (0.10), rebalance_every (100 steps), max_cell_cost). `balanced`: the
+# defaults; `static`: the first partition is kept (vertices still migrate to the owners of
+# the pieces they move into, but the pieces are never re-cut).
 PARALLEL_KEYS = {"curve": "curve", "threshold": "rebalance_threshold", "every": "rebalance_every"}
 VARIANTS = {
     "balanced": {},
-    "static": {PARALLEL_KEYS["every"]: 0},
+    "static": {PARALLEL_KEYS["threshold"]: 1.0e9},
 }
 
 CUBE = {"size": 1.0, "gap": 0.01, "height": 3}
@@ -72,6 +82,30 @@ def cube_block(columns: int, cells: int = 8, height: int = CUBE["height"]):
     meta = {"layout": [nx, ny, height], "bodies": n, "n_tets": n * 12 * cells ** 3,
             "n_vertices": n * ((cells + 1) ** 3 + cells ** 3), "n_particles": 0}
     return scene, meta
+
+
+def sliding_block(nx: int, ny: int, cells: int = 4, layers: int = 2, speed: float = 6.0, run_out: float = 1.5):
+    """nx x ny x `layers` cubes (1 m, `cells`^3 hexes) sliding at `speed` along +x on a floor
+    (mu 0.1) into an end wall `run_out` m ahead: the whole load travels across the domain, so a
+    partition cut at the start goes stale (the balancer case for solids)."""
+    s, gap = CUBE["size"], CUBE["gap"]
+    bodies = []
+    for k in range(layers):
+        for j in range(ny):
+            for i in range(nx):
+                o = [round(i * (s + gap), 6), round(j * (s + gap), 6), round(gap + k * (s + gap), 6)]
+                bodies.append({"name": f"s{i}_{j}_{k}", "material": "block", "velocity": [speed, 0, 0],
+                               "mesh": {"type": "box", "origin": o, "size": [s, s, s], "cells": [cells] * 3}})
+    end = round(nx * (s + gap) + run_out, 6)
+    scene = {"name": f"slide_{nx}x{ny}x{layers}", "run": {"end_time": 0.01}, "gravity": [0, 0, -9.81],
+             "materials": {"block": {"E": 1.0e7, "nu": 0.3, "density": 1000, "viscosity": 2000}},
+             "contact": {"mu": 0.1, "restitution": 0.3, "d_dem": gap},
+             "walls": [{"point": [0, 0, 0], "normal": [0, 0, 1], "mu": 0.1},
+                       {"point": [end, 0, 0], "normal": [-1, 0, 0], "mu": 0.1}],
+             "bodies": bodies, "output": {"fields_every": 0, "probes_every": 0}}
+    n = len(bodies)
+    return scene, {"layout": [nx, ny, layers], "bodies": n, "n_tets": n * 12 * cells ** 3,
+                   "n_vertices": n * ((cells + 1) ** 3 + cells ** 3), "n_particles": 0}
 
 
 def _lattice_count(lo, hi, dx):
@@ -153,6 +187,9 @@ SWEEPS = {
     "topple-weak": {"case": "topple", "mode": "weak", "ranks": [1, 2, 4, 8, 16, 32],
                     "presets": {"cpu": {"per_rank": 32, "rows": 4, "end_time": 0.25},
                                 "cuda": {"per_rank": 1024, "rows": 16, "end_time": 0.25}}},
+    "slide-balance": {"case": "slide", "mode": "strong", "ranks": [4, 8], "variants": ["balanced", "static"],
+                      "presets": {"cpu": {"nx": 4, "ny": 3, "cells": 4, "end_time": 0.45},
+                                  "cuda": {"nx": 32, "ny": 16, "cells": 4, "end_time": 0.45}}},
     "dambreak-balance": {"case": "dambreak", "mode": "strong", "ranks": [4, 8],
                          "variants": ["balanced", "static"],
                          "presets": {"cpu": {"width": 0.8, "dx": 0.04, "end_time": 0.6, "closed": True},
@@ -183,6 +220,8 @@ def scene_for(sweep: str, ranks: int, backend: str = "cpu", variant: str | None 
         if weak and (p["per_rank"] * ranks) % p["rows"]:
             raise ValueError(f"{sweep}: {p['per_rank']} x {ranks} dominoes do not fill {p['rows']} rows")
         scene, meta = domino_rows(per_row, p["rows"])
+    elif sw["case"] == "slide":
+        scene, meta = sliding_block(p["nx"], p["ny"], p["cells"])
     else:
         raise ValueError(sw["case"])
     if variant:
@@ -199,6 +238,8 @@ def scene_for(sweep: str, ranks: int, backend: str = "cpu", variant: str | None 
 
 
 def dump(scene: dict) -> str:
+    if yaml is None:
+        return json.dumps(scene, indent=1) + "\n"
     return yaml.safe_dump(scene, default_flow_style=None, sort_keys=False, width=160)
 
 
