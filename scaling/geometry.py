@@ -242,24 +242,25 @@ def _expand(lo, cnt):
     return start + np.arange(int(cnt.sum()))
 
 
-def _contact_cell_ranks(pos, own, B):
-    """Sorted (cell key, rank) pairs: for every band cell holding a contact vertex, the ranks
-    owning a contact vertex in the 5^3 cells within two cells of it."""
+def _contact_cell_ranks(pos, own, B, R):
+    """The contact band of every occupied band cell: (cells, pairs) with `cells` the sorted
+    keys of the band cells holding a contact vertex and `pairs` the sorted values
+    cell index x R + rank for every rank owning a contact vertex in the 5^3 cells within two
+    cells of it."""
     keys = _band_cells(pos, B)
-    occ = np.unique(np.stack([keys, own.astype(np.int64)], 1), axis=0)  # (cell, owner), sorted
-    ok, orank = occ[:, 0], occ[:, 1]
     cells = np.unique(keys)
-    out_c, out_r = [], []
+    occ = np.unique(np.searchsorted(cells, keys) * R + own.astype(np.int64))  # (cell, owner)
+    ok, orank = cells[occ // R], occ % R  # sorted by cell key
+    out = []
     for dx in range(-2, 3):
         for dy in range(-2, 3):
             for dz in range(-2, 3):
                 nb = cells + (dx << 42) + (dy << 21) + dz
                 lo = np.searchsorted(ok, nb, "left")
                 cnt = np.searchsorted(ok, nb, "right") - lo
-                m = cnt > 0
-                out_c.append(np.repeat(cells[m], cnt[m]))
-                out_r.append(orank[_expand(lo[m], cnt[m])])
-    return np.unique(np.stack([np.concatenate(out_c), np.concatenate(out_r)], 1), axis=0)
+                m = np.nonzero(cnt)[0]
+                out.append(np.repeat(m, cnt[m]) * R + orank[_expand(lo[m], cnt[m])])
+    return cells, np.unique(np.concatenate(out))
 
 
 def partition_geometry(scene: dict, nranks: int, curve="hilbert", weights=None, max_leaf=0.02,
@@ -299,7 +300,7 @@ def partition_geometry(scene: dict, nranks: int, curve="hilbert", weights=None, 
     ghosts = np.zeros(R, np.int64)
     ghosts_surf = np.zeros(R, np.int64)
     vd_all, vsrc_all = [], []
-    cr = _contact_cell_ranks(it.vertices[it.surface], vown[it.surface], it.band) if R > 1 and it.surface.any() else None
+    cr = _contact_cell_ranks(it.vertices[it.surface], vown[it.surface], it.band, R) if R > 1 and it.surface.any() else None
     for t, v0, v1 in it.tet_chunks(ranges=True):
         o = vown[t]  # (m, 4)
         home += np.bincount(o[np.arange(len(t)), np.argmin(t, axis=1)], minlength=R)
@@ -319,11 +320,12 @@ def partition_geometry(scene: dict, nranks: int, curve="hilbert", weights=None, 
         if cr is not None:  # contact vertices of this chunk -> ranks in their band
             sv = np.nonzero(it.surface[v0:v1])[0] + v0
             if len(sv):
-                kc = _band_cells(it.vertices[sv], it.band)
-                lo = np.searchsorted(cr[:, 0], kc, "left")
-                cnt = np.searchsorted(cr[:, 0], kc, "right") - lo
+                cells, cpairs = cr
+                ci = np.searchsorted(cells, _band_cells(it.vertices[sv], it.band))  # occupied: found
+                lo = np.searchsorted(cpairs, ci * R, "left")
+                cnt = np.searchsorted(cpairs, ci * R + R, "left") - lo
                 vi = np.repeat(sv, cnt)
-                ri = cr[_expand(lo, cnt), 1]
+                ri = cpairs[_expand(lo, cnt)] % R
                 keep = ri != vown[vi]
                 pairs.append(vi[keep] * R + ri[keep])
         allp = np.unique(np.concatenate(pairs))  # a vertex is in one chunk only
@@ -366,6 +368,41 @@ def partition_geometry(scene: dict, nranks: int, curve="hilbert", weights=None, 
     return out
 
 
+def validate(records: list[dict], curve="hilbert", pairs_one_rank: dict | None = None) -> list[dict]:
+    """Halo of measured runs (run.py records of the distributed stepper) against this
+    module's prediction for the same scene: ghost vertices x 48 B (x, v per force
+    evaluation) vs parallel.halo_bytes_per_step, owned vertices and tets per rank; and the
+    contact pairs found (summed over ranks) per 1-rank pairs against the surface held
+    (owned + ghost) per owned surface, with the ghost weight k that makes
+    pairs(N) / (N pairs(1)) = 1 + k ghost surface / owned surface (pairs_one_rank: sweep ->
+    pairs of its 1-rank run, per rank of work)."""
+    import scenes
+    rows = []
+    for r in records:
+        p = r.get("parallel") or {}
+        if r.get("status") != "ok" or (p.get("ranks") or 1) < 2:
+            continue
+        sc, _ = scenes.scene_for(r["sweep"], r["ranks"], r["preset"], r.get("variant"))
+        g = partition_geometry(sc, r["ranks"], curve)
+        pred = int(g["ghost_vertices"].sum() + g["ghost_particles"].sum())
+        rows.append({"sweep": r["sweep"], "preset": r["preset"], "ranks": r["ranks"],
+                     "measured_halo_bytes_per_step": p["halo_bytes_per_step"],
+                     "measured_ghosts_at_48B": p["halo_bytes_per_step"] / 48.0, "predicted_ghosts": pred,
+                     "ratio": pred / (p["halo_bytes_per_step"] / 48.0) if p["halo_bytes_per_step"] else None,
+                     "measured_owned_vertices": p.get("owned_vertices"), "predicted_owned_vertices": g["owned_vertices"].tolist(),
+                     "measured_owned_tets": p.get("owned_tets"), "predicted_home_tets": g["home_tets"].tolist(),
+                     "rebalances": p.get("rebalances"), "machine": (r.get("machine") or {}).get("host"),
+                     "revision": (r.get("machine") or {}).get("revision")})
+        one = (pairs_one_rank or {}).get(r["sweep"])
+        pairs = (r.get("items") or {}).get("contact_pairs")
+        os_, gs = float(g["owned_surface_vertices"].sum()), float(g["ghost_surface_vertices"].sum())
+        if one and pairs and os_ > 0 and gs > 0:
+            ratio = pairs / (r["ranks"] * one)
+            rows[-1].update({"pairs_measured_per_1rank": ratio, "held_surface_per_owned": (os_ + gs) / os_,
+                             "ghost_pair_weight": (ratio - 1) / (gs / os_)})
+    return rows
+
+
 def summarise(g: dict) -> dict:
     """JSON-friendly summary: per-rank lists plus max/mean of each count."""
     s = {}
@@ -389,7 +426,25 @@ def main(argv=None):
     ap.add_argument("--ranks-per-node", default="2,4,8,16,32,64", help="node sizes for the on/off-node split")
     ap.add_argument("--max-items", type=float, default=4e7, help="skip rank counts whose scene has more items")
     ap.add_argument("--json", help="write the per-rank-count summaries here")
+    ap.add_argument("--validate", nargs="+", help="run.py records of distributed runs (and the 1-rank run of the "
+                    "sweep, for the contact pairs): measured vs predicted halo")
     a = ap.parse_args(argv)
+    if a.validate:
+        recs = [json.loads(Path(f).read_text()) for f in a.validate]
+        one = {r["sweep"]: r["items"]["contact_pairs"] for r in recs
+               if r.get("status") == "ok" and r.get("ranks") == 1 and (r.get("items") or {}).get("contact_pairs")}
+        rows = validate(recs, a.curve, one)
+        for v in rows:
+            print(f"{v['sweep']} N={v['ranks']}: halo measured {v['measured_ghosts_at_48B']:.0f} ghosts (at 48 B), "
+                  f"predicted {v['predicted_ghosts']} (ratio {v['ratio']:.4f})"
+                  + (f"; pairs {v['pairs_measured_per_1rank']:.3f} x 1-rank, held surface "
+                     f"{v['held_surface_per_owned']:.3f} x owned: ghost pair weight {v['ghost_pair_weight']:.2f}"
+                     if "ghost_pair_weight" in v else ""))
+        if a.json:
+            Path(a.json).write_text(json.dumps({"what": "halo of the distributed stepper (measured "
+                                                        "parallel.halo_bytes_per_step / 48 B) against geometry.py",
+                                                "rows": rows}, indent=1) + "\n")
+        return
     ranks = [int(x) for x in a.ranks.split(",")]
     rows = []
     for n in ranks:

@@ -11,9 +11,12 @@ Time per step of rank r (the step ends when the slowest rank ends):
        + c_particle * (owned_particles_r + g * ghost_particles_r) + c_step
        held tets = home tets + halo tets (a tet is computed on every rank owning one of its
        vertices, docs/parallel.md item 1: redundant work at the cuts); pairs_r = pairs per
-       surface vertex x (owned + ghost surface vertices): a rank finds the candidate pairs
-       among all the surface it holds (on 2 ranks of the cube block the pairs per rank were
-       1.34 x the 1-rank pairs per 27 cubes, the surface held 1.26 x);
+       surface vertex x (owned + k ghost surface vertices): a rank finds candidate pairs
+       among all the surface it holds, ghosts included. k = 1.4 measured (wip-mpi aef1376,
+       cube block on 2, 4, 8 ranks: pairs 1.34, 1.80, 3.00 x the 1-rank pairs while the
+       held surface was 1.25, 1.56, 2.44 x the owned: k = 1.38, 1.43, 1.38;
+       references/benchmarks/scaling/halo_validation_cubes_devvm.json); k = 0 is the plan of
+       docs/parallel.md item 4 (each pair evaluated once, by one owner);
        g: the share of a particle's work a ghost costs, 0.15 (a ghost is sorted into the cell
        list; the density and force loops run over owned particles only).
        Balancer: when max_r C_r / mean C - 1 exceeds the rebalance threshold (0.10, the
@@ -124,24 +127,31 @@ class Options:
     rebalance_interval: int = 0   # steps between rebalances (0: none)
     migrated_bytes: float = 0.0   # per rebalance, per rank
     pairs_per_surface_vertex: float = 0.0
+    ghost_pair_weight: float = 1.4  # k: candidate pairs per ghost surface vertex / per owned one
 
 
 def _terms(geo: dict, r: int, costs: Costs, net: Network, opt: Options, N: int) -> dict:
     """Compute and exchange seconds of rank r of one geometry row, on N ranks in all."""
     g = lambda k: float(geo[k][r]) if k in geo and len(geo[k]) > r else 0.0  # noqa: E731
     C = (costs.tet * g("held_tets") + costs.vertex * g("owned_vertices")
-         + costs.pair * opt.pairs_per_surface_vertex * (g("owned_surface_vertices") + g("ghost_surface_vertices"))
+         + costs.pair * opt.pairs_per_surface_vertex
+         * (g("owned_surface_vertices") + opt.ghost_pair_weight * g("ghost_surface_vertices"))
          + costs.particle * (g("owned_particles") + opt.ghost_particle_work * g("ghost_particles")) + costs.step)
     if N == 1:
         return {"compute": C, "exchange": 0.0, "exchange_raw": 0.0}
     rpn = net.ranks_per_node
     gv, gp = g("ghost_vertices"), g("ghost_particles")
-    off_key = f"_offnode_rpn{rpn}"
+    # the node split of the geometry for this node size, or else for the largest smaller one
+    # (more traffic off node: conservative); none: everything off node
+    have = [int(k[len("ghost_vertices_offnode_rpn"):]) for k in geo
+            if k.startswith("ghost_vertices_offnode_rpn") and k[len("ghost_vertices_offnode_rpn"):].isdigit()]
+    use = max([q for q in have if q <= rpn], default=None)
     if N <= rpn:  # one node
         gv_off = gp_off = k_off = 0.0
-    elif "ghost_vertices" + off_key in geo:
-        gv_off, gp_off, k_off = g("ghost_vertices" + off_key), g("ghost_particles" + off_key), g("recv_neighbours" + off_key)
-    else:  # no node split in the geometry: all off node (pessimistic)
+    elif use is not None and N > use:
+        key = f"_offnode_rpn{use}"
+        gv_off, gp_off, k_off = g("ghost_vertices" + key), g("ghost_particles" + key), g("recv_neighbours" + key)
+    else:
         gv_off, gp_off, k_off = gv, gp, g("recv_neighbours")
     k = g("recv_neighbours")
     b_on = (gv - gv_off) * opt.vertex_bytes + (gp - gp_off) * opt.particle_bytes
@@ -300,6 +310,8 @@ def main(argv=None):
     p.add_argument("--jitter", type=float, default=0.01)
     p.add_argument("--threshold", type=float, default=0.10, help="rebalance threshold (the stepper's default 0.10)")
     p.add_argument("--static", action="store_true", help="static partition (no rebalancing)")
+    p.add_argument("--ghost-pairs", type=float, default=1.4,
+                   help="k, candidate pairs of a ghost surface vertex per owned one (1.4 measured; 0: pairs once)")
     p.add_argument("--json", help="write the prediction here")
     c = sub.add_parser("calibrate", help="per-item costs from single-rank run records / bench records")
     c.add_argument("records", nargs="+")
@@ -337,11 +349,11 @@ def main(argv=None):
     ppv = a.pairs_per_surface_vertex
     if ppv is None:
         ppv = json.loads((HERE / "costs.json").read_text()).get("pairs_per_surface_vertex", {}).get(geo.get("sweep") or "", 0.0)
-    opt = Options(overlap=a.overlap, jitter=a.jitter, pairs_per_surface_vertex=ppv,
+    opt = Options(overlap=a.overlap, jitter=a.jitter, pairs_per_surface_vertex=ppv, ghost_pair_weight=a.ghost_pairs,
                   rebalance_threshold=None if a.static else a.threshold)
     pred = predict(rows, costs, NETWORKS[a.network], opt)
     print(f"PREDICTION (model, not a measurement): {geo.get('sweep')} ({geo.get('backend_preset')} preset), "
-          f"costs {a.costs}, network {a.network}, overlap {a.overlap}, jitter {a.jitter}, "
+          f"costs {a.costs}, network {a.network}, overlap {a.overlap}, jitter {a.jitter}, ghost pairs k {a.ghost_pairs}, "
           f"{'static partition' if a.static else f'rebalance threshold {a.threshold}'}")
     print(f"{'N':>5} {'ms/step':>9} {'compute':>9} {'exch':>8} {'lat':>7} {'bw':>7} {'stage':>7} {'imb %':>6} {'E vs 1':>7} {'E vs 8':>7}")
     for o in pred:

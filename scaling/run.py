@@ -225,13 +225,13 @@ def run_sweep(a) -> list[dict]:
                 t0 = time.time()
                 status, note, summary = "ok", "", None
                 shutil.rmtree(rd, ignore_errors=True)
+                limit = left if left is not None and left < a.timeout else a.timeout
                 try:
-                    p = subprocess.run(cmd, env=dict(os.environ, **env), capture_output=True, text=True,
-                                       timeout=left if left is not None and left < a.timeout else a.timeout)
+                    p = subprocess.run(cmd, env=dict(os.environ, **env), capture_output=True, text=True, timeout=limit)
                     if p.returncode != 0:
                         status, note = "failed", f"exit {p.returncode}: {(p.stderr or p.stdout)[-2000:]}"
                 except subprocess.TimeoutExpired:
-                    status, note = "timeout", f"killed after {a.timeout} s"
+                    status, note = "timeout", f"killed after {limit:.0f} s (time limit of the run or what was left of the budget)"
                 last = time.time() - t0
                 sj = rd / "summary.json"
                 if sj.exists():

@@ -156,5 +156,7 @@ def test_contact_work_counts_owned_and_ghost_surface():
     g["owned_surface_vertices"] = [100, 100]
     g["ghost_surface_vertices"] = [30, 10]
     c = model.Costs(tet=0.0, vertex=0.0, pair=1e-6, particle=0.0)
-    p = model.step_time(g, c, model.NETWORKS["ideal"], replace(NOJIT, pairs_per_surface_vertex=20.0))
+    p = model.step_time(g, c, model.NETWORKS["ideal"], replace(NOJIT, pairs_per_surface_vertex=20.0, ghost_pair_weight=1.0))
     assert p["compute_s"] == pytest.approx(130 * 20 * 1e-6)
+    q = model.step_time(g, c, model.NETWORKS["ideal"], replace(NOJIT, pairs_per_surface_vertex=20.0, ghost_pair_weight=0.0))
+    assert q["compute_s"] == pytest.approx(100 * 20 * 1e-6)
