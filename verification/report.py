@@ -175,7 +175,7 @@ td,th{border:1px solid #ccc;padding:2px 6px;text-align:left} th{background:#eee}
 img{width:calc(50% - 24px);min-width:480px;border:1px solid #ddd;margin:4px}"""
 
 
-def build_html(records, session, baseline, rows, regressions, missing, figs):
+def build_html(records, session, baseline, rows, regressions, missing, figs, extra=""):
     m = session.get("machine") or machine.describe()
     npass = sum(r.get("pass") is True for r in records)
     nfail = sum(r.get("pass") is False for r in records)
@@ -203,6 +203,7 @@ def build_html(records, session, baseline, rows, regressions, missing, figs):
         h.append("<h2>Figures</h2>")
         for fig_id, png in figs.items():
             h.append(f"<img alt='{html.escape(fig_id)}' src='data:image/png;base64,{png}'>")
+    h.append(extra)
     h.append("<h2>All records</h2><table><tr><th>case</th><th>metric</th><th>value</th><th>unit</th>"
              "<th>reference</th><th>tolerance</th><th>check</th><th>pass</th><th>wall s</th><th>backend</th>"
              "<th>baseline</th><th>change</th></tr>")
@@ -279,7 +280,15 @@ def main(argv=None):
     m = session.get("machine") or machine.describe()
     mline = f"{m.get('cpu')}, {m.get('cores')} cores; {session.get('tier', '?')} tier, {session.get('finished', '')}"
     figs = figures(session.get("series", []), mline)
-    (out / "report.html").write_text(build_html(records, session, baseline, rows, regressions, missing, figs))
+    # Scaling records (references/benchmarks/scaling, <out>/scaling): tables and figures.
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("scaling_report", REPO / "scaling" / "report.py")
+    scaling_report = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(scaling_report)
+    sfigs, shtml = scaling_report.section([out / "scaling"])
+    shtml += "".join(f"<img alt='{k}' src='data:image/png;base64,{v}'>" for k, v in sfigs.items())
+    (out / "report.html").write_text(build_html(records, session, baseline, rows, regressions, missing, figs, shtml))
     nfail = sum(r.get("pass") is False for r in records)
     print(f"report: {out / 'report.html'}: {len(records)} records, {nfail} failing check(s), "
           f"{len(regressions)} accuracy regression(s) against {bpath.name if baseline else 'no baseline'}")

@@ -3,23 +3,28 @@
 # GPU machine needs into PACK (default build-cuda-pack): bin/ (qdemsph, qdemsph_tests,
 # qdemsph_bench) and lib/ (shared libraries the GPU machines lack). Carry PACK to the GPU
 # machine and run ci/gpu_session.sh there; it sets LD_LIBRARY_PATH=PACK/lib.
+# PACK_MPI=1 (opt-in, for scaling/gpu_sweep.sh): build with MPI (QDEMSPH_MPI=ON) into
+# build-cuda-mpi and pack build-cuda-mpi-pack (+ REVISION); the GPU machines have Open MPI
+# 4.1.6 (libmpi.so.40), so libmpi is not packed.
 #
 # gmsh: the GPU machines have none, and libgmsh pulls in ~300 MB (OpenCASCADE, FLTK, ...).
 # lib/ gets a stub libgmsh.so.4.8 exporting the same gmsh:: functions, each throwing
 # "gmsh is not available"; only .msh import and shogi meshing need it, which the GPU session
 # does not use (box meshes only).
 set -euo pipefail
-BUILD=${BUILD:-build-cuda}
-PACK=${1:-build-cuda-pack}
+MPI=OFF; [ "${PACK_MPI:-0}" = 1 ] && MPI=ON
+BUILD=${BUILD:-build-cuda$([ $MPI = ON ] && echo -mpi)}
+PACK=${1:-build-cuda$([ $MPI = ON ] && echo -mpi)-pack}
 JOBS=${JOBS:-2}
 cd "$(dirname "$0")/../.."
-cmake -S . -B "$BUILD" -DQDEMSPH_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90 -DQDEMSPH_MPI=OFF \
+cmake -S . -B "$BUILD" -DQDEMSPH_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90 -DQDEMSPH_MPI=$MPI \
   -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$BUILD" -j "$JOBS" --target qdemsph qdemsph_tests qdemsph_bench
 rm -rf "$PACK"
 mkdir -p "$PACK/bin" "$PACK/lib"
 cp "$BUILD"/bin/qdemsph "$BUILD"/bin/qdemsph_tests "$BUILD"/bin/qdemsph_bench "$PACK/bin/"
 strip "$PACK"/bin/* || true
+if [ $MPI = ON ]; then git rev-parse --short HEAD >"$PACK/REVISION" 2>/dev/null || true; fi
 
 # Stub gmsh: every exported gmsh:: C++ API function jumps to one function that throws.
 GMSH=$(ldd "$PACK/bin/qdemsph" | awk '/libgmsh/ {print $3}')

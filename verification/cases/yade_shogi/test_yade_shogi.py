@@ -14,6 +14,7 @@ import pytest
 
 from harness import must
 from harness.paths import REPO
+from harness.shogi import crossing, tilt_history
 
 SCENE = REPO / "verification" / "cases" / "contact_shogi" / "scene_pair.yaml"
 YADE = REPO / "references" / "yade" / "results"
@@ -53,42 +54,6 @@ VARIANTS = {
     # boxwood stiffness (E ~ 1e10 Pa along the grain), coarse pieces
     "coarse_E1e10": ["materials.boxwood.E=1.0e10"],
 }
-
-
-def crossing(t, a, level):
-    """First time a rises through level (linear interpolation), None if never."""
-    a = np.asarray(a)
-    i = np.flatnonzero((a[:-1] < level) & (a[1:] >= level))
-    if not i.size:
-        return None
-    k = i[0]
-    return float(t[k] + (level - a[k]) * (t[k + 1] - t[k]) / (a[k + 1] - a[k]))
-
-
-def tilt_history(fields_h5):
-    """Tilt (deg, positive toward the struck piece, i.e. -y) of both bodies' height axes,
-    from a rigid (Kabsch) fit of each body's vertex positions to its initial ones."""
-    s, c = math.sin(math.radians(TILT0)), math.cos(math.radians(TILT0))
-    axes0 = [np.array([0.0, -s, c]), np.array([0.0, 0.0, 1.0])]
-    with h5py.File(fields_h5, "r") as f:
-        p0 = np.asarray(f["mesh/points"], dtype=float)
-        body = np.asarray(f["mesh/body"])
-        steps = sorted(f["steps"].keys())
-        t = np.array([float(f["steps"][k].attrs["time"]) for k in steps])
-        xs = [np.asarray(f["steps"][k]["position"], dtype=float) for k in steps]
-    tilts = []
-    for b, a0 in enumerate(axes0):
-        idx = np.flatnonzero(body == b)
-        q0 = p0[idx] - p0[idx].mean(0)
-        out = []
-        for x in xs:
-            q = x[idx] - x[idx].mean(0)
-            u, _, vt = np.linalg.svd(q0.T @ q)
-            d = np.sign(np.linalg.det(vt.T @ u.T))
-            a = vt.T @ np.diag([1.0, 1.0, d]) @ u.T @ a0
-            out.append(math.degrees(math.atan2(-a[1], a[2])))
-        tilts.append(np.array(out))
-    return t, tilts, p0, body
 
 
 def geometry(p0, body, tets):
@@ -171,7 +136,7 @@ def run_variant(variant, qdemsph, checks, case_out):
         m = f"{variant}.mu{mu}."
         checks.check(m + "completed", 1.0 if run.status == "completed" else 0.0, kind="min",
                      tolerance=1.0, unit="bool")
-        t, (a0, a1), p0, body = tilt_history(run.out / "fields.h5")
+        t, (a0, a1), p0, body = tilt_history(run.out / "fields.h5", [TILT0, 0.0])
         wall = run.solver_wall_s
         ev = {"hit": crossing(t, a1, 1.0), "struck45": crossing(t, a1, 45.0),
               "struck80": crossing(t, a1, 80.0), "falling45": crossing(t, a0, 45.0),
@@ -263,7 +228,7 @@ def test_geometry_matches_yade(qdemsph, checks, case_out):
     checks.check("geometry.pivot_to_struck_face", gap, kind="abs", reference=prov["pitch_m"] - T,
                  tolerance=2e-5, unit="m", note="YADE: pitch 30 mm between base centres, pivot at T/2")
     checks.check("geometry.pivot_y", g["pivot_y"], kind="abs", reference=-0.5 * T, tolerance=2e-5, unit="m")
-    t, (a0, a1), _, _ = tilt_history(run.out / "fields.h5")
+    t, (a0, a1), _, _ = tilt_history(run.out / "fields.h5", [TILT0, 0.0])
     checks.check("geometry.initial_tilt", a0[0], kind="abs", reference=prov["tilt0_deg"], tolerance=0.01, unit="deg")
     checks.info("geometry.edge_clearance", g["pivot_z"], unit="m",
                 note="0.2 mm = D_DEM above the floor (YADE: on the floor, edge contact sinks 0.2-0.6 mm)")

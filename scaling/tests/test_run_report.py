@@ -1,0 +1,54 @@
+"""Runner helpers (scaling/run.py) and report arithmetic (scaling/report.py)."""
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import report  # noqa: E402
+import run  # noqa: E402
+
+
+def test_mpirun_binding_and_flags():
+    cmd, env, facts = run.launch_command("mpirun", 4, 1, "cpu", cores=16, root=True, extra=[])
+    assert cmd[:3] == ["mpirun", "-np", "4"] and "--allow-run-as-root" in cmd
+    assert cmd[cmd.index("--bind-to") + 1] == "core" and "--oversubscribe" not in cmd
+    assert env["OMP_NUM_THREADS"] == "1" and "OMP_NUM_THREADS=1" in cmd
+    cmd, _, facts = run.launch_command("mpirun", 2, 8, "cuda", cores=16, root=False, extra=[])
+    assert "slot:PE=8" in cmd and "--allow-run-as-root" not in cmd
+    cmd, _, facts = run.launch_command("mpirun", 32, 1, "cpu", cores=16, root=False, extra=[])
+    assert "--oversubscribe" in cmd and facts["oversubscribed"]
+    cmd, _, facts = run.launch_command("srun", 8, 4, "cuda", cores=64, root=False, extra=[])
+    assert cmd[:3] == ["srun", "-n", "8"] and "--gpus-per-task=1" in cmd and "--cpus-per-task=4" in cmd
+    with pytest.raises(ValueError):
+        run.launch_command("none", 2, 1, "cpu", cores=4, root=False, extra=[])
+
+
+def test_step_seconds_prefers_the_rank_mean_and_drops_output_and_subphases():
+    s = {"steps": 10, "phases": {"elements": 5.0, "output": 9.0},
+         "parallel": {"phases_mean": {"elements": 1.0, "contact": 0.5, "contact.broad": 0.2, "halo": 0.5,
+                                      "output": 3.0, "migration": 0.4, "balance": 0.1},
+                      "phases_max": {"elements": 1.2, "contact": 0.5, "halo": 0.6, "output": 3.0, "migration": 1.0}}}
+    t = run.step_seconds(s)
+    assert t["step_s"] == pytest.approx(0.2) and t["phase_source"] == "parallel.phases_mean"
+    assert t["step_s_all"] == pytest.approx(0.25)
+    assert t["step_s_maxsum"] == pytest.approx(0.23)
+    serial = run.step_seconds({"steps": 4, "phases": {"elements": 2.0, "output": 1.0, "contact.narrow": 1.0}})
+    assert serial["step_s"] == pytest.approx(0.5)
+
+
+def rec(n, step_s, mode="weak"):
+    return {"ranks": n, "step_s": step_s, "mode": mode, "size": {"n_tets": n, "n_particles": 0},
+            "imbalance": None, "halo_bytes_per_step": None}
+
+
+def test_weak_efficiency_against_1_and_8_ranks():
+    rows = report.efficiencies([rec(1, 1.0), rec(8, 1.25), rec(64, 1.6)], "weak")
+    assert rows[1]["E1"] == pytest.approx(0.8)
+    assert rows[2]["E1"] == pytest.approx(1 / 1.6) and rows[2]["E8"] == pytest.approx(1.25 / 1.6)
+    assert "E8" not in rows[0]
+
+
+def test_strong_efficiency():
+    rows = report.efficiencies([rec(1, 8.0, "strong"), rec(4, 2.5, "strong")], "strong")
+    assert rows[1]["E1"] == pytest.approx(8.0 / (4 * 2.5)) and rows[1]["speedup"] == pytest.approx(3.2)
