@@ -77,13 +77,8 @@ class QdemBackend final : public Backend {
     flag_.resize(1);
     contact_.reset();
     if (m.contact.enabled) {
-      if constexpr (S == Space::Host) {
-        contact_ = std::make_unique<ContactStage<Exec>>();
-        contact_->upload(m);
-      } else {
-        throw InputError("the scene needs contact, which backend '" + name_ +
-                         "' does not have yet; use --backend cpu");
-      }
+      contact_ = std::make_unique<ContactStage<Exec>>();
+      contact_->upload(m);
     }
   }
 
@@ -134,8 +129,7 @@ class QdemBackend final : public Backend {
           }
           f.set(i, s);
         });
-    if constexpr (S == Space::Host)
-      if (contact_) contact_->add_forces(x_.cview(), v_.cview(), f_.view(), dt_diss);
+    if (contact_) contact_->add_forces(x_.cview(), v_.cview(), f_.view(), dt_diss);
   }
 
   // The contact stage (null when the model needs none), for tests and diagnostics.
@@ -256,6 +250,10 @@ class QdemBackend final : public Backend {
                        Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) { return diss_t[t]; }) +
                    reduce_sum(
                        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return diss_v[i]; });
+    if (contact_) {
+      e.contact = contact_->stored_energy();
+      e.contact_dissipated = contact_->dissipated_energy();
+    }
     return e;
   }
 
