@@ -71,10 +71,10 @@ struct ContactTopology {
     return tri_vertex(s, 0) == v || tri_vertex(s, 1) == v || tri_vertex(s, 2) == v;
   }
 
-  // Contacts between the features owned by triangles a and b; writes them to out (if not
-  // null) and returns how many.
-  QDEMSPH_HD int narrow_tris(Vec3CView x, std::int64_t a, std::int64_t b,
-                             ContactRecord* out) const {
+  // Contacts between the features owned by triangles a and b; writes the first `cap` of them
+  // to out (if not null) and returns how many there are.
+  QDEMSPH_HD int narrow_tris(Vec3CView x, std::int64_t a, std::int64_t b, ContactRecord* out,
+                             std::int64_t cap) const {
     const int ba = tri_body[a], bb = tri_body[b];
     const bool same = ba == bb;
     const double ha = body_h[ba], hb = body_h[bb];
@@ -94,7 +94,7 @@ struct ContactTopology {
         if (same && tri_has(s2, A)) continue;
         const PointFace pf = point_face(x[A], p2[0], p2[1], p2[2]);
         if (!pf.inside || !(pf.s < d_dem) || !(pf.s > -pen)) continue;
-        if (out) {
+        if (out && n < cap) {
           ContactRecord& r = out[n];
           r = ContactRecord{};
           r.type = kPointFace;
@@ -127,7 +127,7 @@ struct ContactTopology {
         // Edges have no face region to confirm a penetration: two skew edges merely passing
         // behind each other would read as a deep overlap. Accept |d| < D_DEM only.
         if (!ee.valid || !(ee.d < d_dem) || !(ee.d > -d_dem)) continue;
-        if (out) {
+        if (out && n < cap) {
           ContactRecord& r = out[n];
           r = ContactRecord{};
           r.type = kEdgeEdge;
@@ -233,6 +233,7 @@ class ContactStage {
     built_ = false;
     rebuilds_ = 0;
     cnt_.resize(np_ + nwv_ + 1);
+    mismatch_.resize(1);
     vcnt_.resize(nv_ + 1);
     vcur_.resize(nv_);
     n_prev_ = 0;
@@ -277,6 +278,9 @@ class ContactStage {
   double max_overlap_ever() const { return max_overlap_ever_; }
   std::int64_t steps() const { return steps_; }
   std::int64_t pair_rebuilds() const { return rebuilds_; }
+  // Items whose fill pass found a different number of contacts than their count pass (0
+  // expected; see narrow_phase). Reads one int back.
+  std::int64_t fill_mismatches() const { return read_back(mismatch_, 0); }
   std::size_t bytes() const {
     return tri_v_.bytes() + edge_v_.bytes() + edge_tri_.bytes() + tri_n_.bytes() + prim_v_.bytes() +
            tri_body_.bytes() + prim_body_.bytes() + own_v_off_.bytes() + own_e_off_.bytes() +
@@ -443,17 +447,20 @@ class ContactStage {
     const auto wall = wall_.cview();
     const auto vb = vertex_body_.cview();
     const double d_dem = d_dem_;
-    auto prim_contacts = QDEMSPH_LAMBDA(std::int64_t i, ContactRecord * out)->std::int64_t {
+    // Each writes at most `cap` records to out (if not null) and returns how many it found.
+    auto prim_contacts =
+        QDEMSPH_LAMBDA(std::int64_t i, ContactRecord * out, std::int64_t cap)->std::int64_t {
       std::int64_t n = 0;
       for (std::int64_t q = ps[i]; q < ps[i + 1]; ++q) {
         const int j = sec[q];
         for (std::int64_t ta = pto[i]; ta < pto[i + 1]; ++ta)
           for (std::int64_t tb = pto[j]; tb < pto[j + 1]; ++tb)
-            n += topo.narrow_tris(x, pt[ta], pt[tb], out ? out + n : nullptr);
+            n += topo.narrow_tris(x, pt[ta], pt[tb], out && n < cap ? out + n : nullptr, cap - n);
       }
       return n;
     };
-    auto wall_contacts = QDEMSPH_LAMBDA(std::int64_t k, ContactRecord * out)->std::int64_t {
+    auto wall_contacts =
+        QDEMSPH_LAMBDA(std::int64_t k, ContactRecord * out, std::int64_t cap)->std::int64_t {
       const int A = wv[k];
       const Vec3 xa = x[A];
       std::int64_t n = 0;
@@ -462,7 +469,7 @@ class ContactStage {
         const Vec3 nn{wall[8 * w + 3], wall[8 * w + 4], wall[8 * w + 5]};
         const double s = dot(xa - p, nn);
         if (!(s < d_dem)) continue;
-        if (out) {
+        if (out && n < cap) {
           ContactRecord& r = out[n];
           r = ContactRecord{};
           r.type = kWall;
@@ -484,18 +491,31 @@ class ContactStage {
     const auto cnt = cnt_.view();
     for_each(
         Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
-          cnt[i] = i < np ? prim_contacts(i, nullptr) : wall_contacts(i - np, nullptr);
+          cnt[i] = i < np ? prim_contacts(i, nullptr, 0) : wall_contacts(i - np, nullptr, 0);
         });
     const std::int64_t nc = exclusive_scan(Exec{}, cnt, np + nwv);
     if (rec_.size() < nc) rec_.resize(nc + nc / 4 + 64);
     const auto rec = rec_.view();
+    // The fill repeats the count's tests, so it finds the same records; should compiled code
+    // ever decide a threshold differently in the two passes (e.g. fused multiply-adds placed
+    // differently), it still writes only its slots, pads them with inactive records and counts
+    // the item in fill_mismatches (contact_stats): never a write into a neighbour's slots.
+    const auto mism = mismatch_.view();
     for_each(
         Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
           ContactRecord* out = rec.p + cnt[i];
-          if (i < np)
-            prim_contacts(i, out);
-          else
-            wall_contacts(i - np, out);
+          const std::int64_t cap = cnt[i + 1] - cnt[i];
+          const std::int64_t n =
+              i < np ? prim_contacts(i, out, cap) : wall_contacts(i - np, out, cap);
+          if (n == cap) return;
+          atomic_inc(&mism[0]);
+          for (std::int64_t k = n; k < cap; ++k) {
+            out[k] = ContactRecord{};
+            out[k].k1 = ~std::uint64_t{0};
+            out[k].k2 = static_cast<std::uint64_t>(cnt[i] + k);
+            out[k].type = kWall;
+            out[k].active = 0;
+          }
         });
     sort_records(Exec{}, rec, nc);
     // One vertex touching one body: keep the point-face hit with the largest gap.
@@ -738,7 +758,7 @@ class ContactStage {
   CellList<Exec> cells_;
   CandidatePairs<Exec> pairs_;
   Buffer<ContactRecord> rec_{S};
-  Buffer<int> ent_v_{S}, vcnt_{S}, vcur_{S}, vent_{S};
+  Buffer<int> ent_v_{S}, vcnt_{S}, vcur_{S}, vent_{S}, mismatch_{S};
   Vec3Buffer ent_f_{S};
   Buffer<std::uint64_t> pk1_{S}, pk2_{S}, nk1_{S}, nk2_{S};
   Buffer<int> pact_{S}, nact_{S};

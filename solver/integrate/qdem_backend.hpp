@@ -147,7 +147,8 @@ class QdemBackend final : public Backend {
             {"active", static_cast<double>(c.active)},
             {"max_overlap", c.max_overlap},
             {"max_overlap_ever", contact_->max_overlap_ever()},
-            {"pair_rebuilds", static_cast<double>(contact_->pair_rebuilds())}};
+            {"pair_rebuilds", static_cast<double>(contact_->pair_rebuilds())},
+            {"fill_mismatches", static_cast<double>(contact_->fill_mismatches())}};
   }
 
   void kick(double h) override {

@@ -405,6 +405,7 @@ ContactRun compare_contact(const std::string& name, const std::string& yaml, int
   std::fflush(stdout);
   EXPECT_GT(r.max_active, 0) << name << ": nothing touched";
   EXPECT_EQ(r.count_mismatches, 0) << name;
+  EXPECT_EQ(p.gpu->contact_stats().at("fill_mismatches"), 0.0) << name;
   return r;
 }
 
@@ -445,8 +446,34 @@ bodies:
   EXPECT_LT(r.de, 1e-9);
 }
 
+// Centre of mass of every body.
+std::vector<Vec3> body_coms(const Model& m, const std::vector<Vec3>& x) {
+  std::vector<Vec3> c;
+  for (const BodyRange& b : m.bodies) {
+    Vec3 s{};
+    double mt = 0;
+    for (std::int64_t i = b.v_begin; i < b.v_end; ++i) {
+      s += m.mass[i] * x[i];
+      mt += m.mass[i];
+    }
+    c.push_back(mt > 0 ? s / mt : s);
+  }
+  return c;
+}
+
 TEST(Cuda, ContactSmallStackMatchesCpu) {
   SKIP_WITHOUT_GPU();
+  // 2x2x2 cubes 1.5 D_DEM apart sideways, falling 2 D_DEM onto each other and the floor. A flat
+  // face lands with all its vertices crossing the contact threshold in the same step, so which
+  // of them touch first is decided at the last bit of the gap, and from the landing on the
+  // vertex-level state is chaotic. The GPU's fused multiply-adds round those gaps differently
+  // from the host: on the CPU alone, the same code built with -mfma -ffp-contract=fast
+  // against without gives, after 288 steps, displacement fields 4.4e-2 apart, body centres
+  // 1.75e-2 of their displacement apart and energy totals 3.3e-2 of the energy scale apart
+  // (while a two-body impact stays at 4e-15). So: round-off agreement and equal counts until
+  // the landing; afterwards the bodies' centres of mass and the energy total within 5e-2.
+  // Measured on an H200 (2026-11-22): first count difference at step 109 (landing at 72),
+  // displacement 5.3e-2, energy total 1.55e-2.
   std::string yaml = R"(
 run: {end_time: 1}
 gravity: [0, 0, -9.81]
@@ -461,12 +488,54 @@ bodies:
         yaml += fmt::format(
             "  - {{name: c{}{}{}, material: block, mesh: {{type: box, origin: [{}, {}, {}], size: "
             "[1, 1, 1], cells: [3, 3, 3]}}}}\n",
-            i, j, k, 1.01 * i, 1.01 * j, 0.01 + 1.01 * k);
-  const ContactRun r = compare_contact("small_stack", yaml, 600);
-  EXPECT_GT(r.max_pairs, 8);
-  EXPECT_LT(r.dx, 1e-9);
-  EXPECT_LT(r.dv, 1e-6);
-  EXPECT_LT(r.de, 1e-9);
+            i, j, k, 1.015 * i, 1.015 * j, 0.02 + 1.02 * k);
+  const Model m = build_model(parse_scene(yaml, "small_stack.yaml"));
+  Pair p = make_pair(m);
+  const double dt = choose_dt(m, std::nullopt, 0.5);
+  Stepper sc(m, *p.cpu, dt), sg(m, *p.gpu, dt);
+  const int steps = 300;
+  int landing = -1, first_diff = -1;
+  double before_landing = 0;  // largest displacement difference before the landing
+  for (int n = 0; n < steps; ++n) {
+    sc.step();
+    sg.step();
+    const auto c = p.cpu->contact_stats(), g = p.gpu->contact_stats();
+    if (landing < 0 && c.at("active") > 0) landing = n;
+    if (first_diff < 0 && (c.at("pairs") != g.at("pairs") || c.at("contacts") != g.at("contacts") ||
+                           c.at("active") != g.at("active")))
+      first_diff = n;
+    if (landing < 0)
+      before_landing =
+          std::max(before_landing, rel_diff(displacement(p.gpu->download(false).x, m),
+                                            displacement(p.cpu->download(false).x, m)));
+  }
+  const auto xc = p.cpu->download(false).x, xg = p.gpu->download(false).x;
+  const auto cc = body_coms(m, xc), cg = body_coms(m, xg), c0 = body_coms(m, m.x);
+  double dcom = 0, scom = 0;
+  for (std::size_t b = 0; b < cc.size(); ++b) {
+    dcom = std::max(dcom, norm(cg[b] - cc[b]));
+    scom = std::max(scom, norm(cc[b] - c0[b]));
+  }
+  const Energies ec = p.cpu->energies(), eg = p.gpu->energies();
+  const double scale = std::fabs(ec.kinetic) + std::fabs(ec.strain) + std::fabs(ec.potential) +
+                       std::fabs(ec.dissipated) + std::fabs(ec.contact) +
+                       std::fabs(ec.contact_dissipated);
+  const double de = rel_diff(eg.total(), ec.total(), scale);
+  report("contact.small_stack.before_landing", before_landing);
+  report("contact.small_stack.displacement", rel_diff(displacement(xg, m), displacement(xc, m)));
+  report("contact.small_stack.com", dcom / scom);
+  report("contact.small_stack.energy_total", de);
+  std::printf(
+      "[cuda-vs-cpu] contact.small_stack steps=%d landing=%d first_count_difference=%d "
+      "fill_mismatches=%.0f\n",
+      steps, landing, first_diff, p.gpu->contact_stats().at("fill_mismatches"));
+  std::fflush(stdout);
+  ASSERT_GE(landing, 0) << "the stack never landed";
+  EXPECT_EQ(p.gpu->contact_stats().at("fill_mismatches"), 0.0);
+  EXPECT_LT(before_landing, 1e-12);
+  EXPECT_TRUE(first_diff < 0 || first_diff >= landing) << first_diff;
+  EXPECT_LT(dcom, 5e-2 * scom);
+  EXPECT_LT(de, 5e-2);
 }
 
 // ---- SPH: the fluid stage on CUDA against the CPU ----------------------------------------------
