@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Builds the CUDA configuration here (a machine with nvcc, no GPU needed) and packs what a
 # GPU machine needs into PACK (default build-cuda-pack): bin/ (qdemsph, qdemsph_tests,
-# qdemsph_bench) and lib/ (shared libraries the GPU machines lack). Carry PACK to the GPU
-# machine and run ci/gpu_session.sh there; it sets LD_LIBRARY_PATH=PACK/lib.
+# qdemsph_bench), lib/ (shared libraries the GPU machines lack) and, in the repository's
+# layout, the scripts and scenes the session uses (ci/, the verification scenes it runs,
+# scaling/sph_bench.py), so the pack runs on its own even where the checkout is another
+# branch. Carry PACK to the GPU machine and run PACK/ci/gpu_session.sh OUTDIR there; it sets
+# LD_LIBRARY_PATH=PACK/lib. Uses ccache when present.
 # PACK_MPI=1 (opt-in, for scaling/gpu_sweep.sh): build with MPI (QDEMSPH_MPI=ON) into
 # build-cuda-mpi and pack build-cuda-mpi-pack (+ REVISION); the GPU machines have Open MPI
 # 4.1.6 (libmpi.so.40), so libmpi is not packed.
@@ -17,8 +20,12 @@ BUILD=${BUILD:-build-cuda$([ $MPI = ON ] && echo -mpi)}
 PACK=${1:-build-cuda$([ $MPI = ON ] && echo -mpi)-pack}
 JOBS=${JOBS:-2}
 cd "$(dirname "$0")/../.."
+LAUNCH=()
+if command -v ccache >/dev/null; then
+  LAUNCH=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_CUDA_COMPILER_LAUNCHER=ccache)
+fi
 cmake -S . -B "$BUILD" -DQDEMSPH_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90 -DQDEMSPH_MPI=$MPI \
-  -DCMAKE_BUILD_TYPE=Release >/dev/null
+  -DCMAKE_BUILD_TYPE=Release "${LAUNCH[@]}" >/dev/null
 cmake --build "$BUILD" -j "$JOBS" --target qdemsph qdemsph_tests qdemsph_bench
 rm -rf "$PACK"
 mkdir -p "$PACK/bin" "$PACK/lib"
@@ -54,5 +61,15 @@ done | sort -u | while read -r lib; do
       cp -L "$lib" "$PACK/lib/" ;;
   esac
 done
+# The scripts and scenes ci/gpu_session.sh uses, at their repository paths.
+for f in ci/gpu_session.sh ci/gpu scaling/sph_bench.py solver/tests/data solver/fuzz/crashes \
+  verification/cases/contact_stack verification/cases/contact_impact \
+  verification/cases/contact_sliding verification/cases/sph_dam_break \
+  verification/cases/cantilever_exact/scene_box.yaml; do
+  mkdir -p "$PACK/$(dirname "$f")"
+  cp -r "$f" "$PACK/$(dirname "$f")/"
+done
+# The unit tests look for their data where this checkout has it (QDEMSPH_TEST_DATA).
+echo "$PWD/solver/tests/data" >"$PACK/test_data_dir"
 du -sh "$PACK"
 ls -la "$PACK/bin" "$PACK/lib"

@@ -82,6 +82,8 @@ Json energies_json(const Energies& e) {
   j["strain"] = e.strain;
   j["potential"] = e.potential;
   j["dissipated"] = e.dissipated;
+  j["contact"] = e.contact;
+  j["contact_dissipated"] = e.contact_dissipated;
   j["total"] = e.total();
   return j;
 }

@@ -1,5 +1,5 @@
-// Orchestration twin (host): sorts contact records by key. The CUDA twin sorts the same
-// records with thrust::sort on the device (next to core/exec_cuda.cuh).
+// Orchestration twin (host): sorts contact records by key. The CUDA twin
+// (contact_sort_cuda.cuh) sorts the same records on the device.
 #pragma once
 
 #include <algorithm>

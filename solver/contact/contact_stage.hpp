@@ -18,7 +18,15 @@
 //     in the previous step's sorted keys), force distributed by weights (a gap below -D_DEM
 //     counts only for a feature pair that was in contact the step before: the back face of
 //     a thin body is not a penetration); a per-vertex gather
-//     (count, scan, fill, segment sort) adds it to f in a fixed order (deterministic).
+//     (count, scan, fill, segment sort) adds it to f in a fixed order (deterministic);
+//  4. energy: the springs' stored energy and the step's dissipation per contact
+//     (physics/contact_law.hpp, contact_energy; the non-potential force h is history like the
+//     spring), plus, for touches that ended, their spring energy and the second half of their
+//     last h's work (the previous step's records are kept for that), summed into the run's
+//     contact_dissipated.
+// Every phase is a for_each / reduce / scan / sort of the launch layer: on CUDA the data stays on
+// the device (sorts and scans: neighbor/neighbor_cuda.cuh, contact/contact_sort_cuda.cuh); the
+// host reads back only sizes (scan totals) and reduction results.
 // Data: SoA views for topology and history; contact records are a transient AoS array.
 #pragma once
 
@@ -65,10 +73,10 @@ struct ContactTopology {
     return tri_vertex(s, 0) == v || tri_vertex(s, 1) == v || tri_vertex(s, 2) == v;
   }
 
-  // Contacts between the features owned by triangles a and b; writes them to out (if not
-  // null) and returns how many.
-  QDEMSPH_HD int narrow_tris(Vec3CView x, std::int64_t a, std::int64_t b,
-                             ContactRecord* out) const {
+  // Contacts between the features owned by triangles a and b; writes the first `cap` of them
+  // to out (if not null) and returns how many there are.
+  QDEMSPH_HD int narrow_tris(Vec3CView x, std::int64_t a, std::int64_t b, ContactRecord* out,
+                             std::int64_t cap) const {
     const int ba = tri_body[a], bb = tri_body[b];
     const bool same = ba == bb;
     const double ha = body_h[ba], hb = body_h[bb];
@@ -88,7 +96,7 @@ struct ContactTopology {
         if (same && tri_has(s2, A)) continue;
         const PointFace pf = point_face(x[A], p2[0], p2[1], p2[2]);
         if (!pf.inside || !(pf.s < d_dem) || !(pf.s > -pen)) continue;
-        if (out) {
+        if (out && n < cap) {
           ContactRecord& r = out[n];
           r = ContactRecord{};
           r.type = kPointFace;
@@ -121,7 +129,7 @@ struct ContactTopology {
         // Edges have no face region to confirm a penetration: two skew edges merely passing
         // behind each other would read as a deep overlap. Accept |d| < D_DEM only.
         if (!ee.valid || !(ee.d < d_dem) || !(ee.d > -d_dem)) continue;
-        if (out) {
+        if (out && n < cap) {
           ContactRecord& r = out[n];
           r = ContactRecord{};
           r.type = kEdgeEdge;
@@ -228,6 +236,7 @@ class ContactStage {
     built_ = false;
     rebuilds_ = 0;
     cnt_.resize(np_ + nwv_ + 1);
+    mismatch_.resize(1);
     vcnt_.resize(nv_ + 1);
     vcur_.resize(nv_);
     n_prev_ = 0;
@@ -260,10 +269,21 @@ class ContactStage {
   }
 
   const std::map<std::string, double>& seconds() const { return timers_.seconds(); }
+  // Elastic energy in the contact springs now (normal + tangential, last force evaluation).
+  double stored_energy() const {
+    const auto en = pen_.cview();
+    return reduce_sum(
+        Exec{}, n_prev_, QDEMSPH_LAMBDA(std::int64_t c) { return en[c]; });
+  }
+  // Energy dissipated by the contact dashpots and Coulomb slip since the start [J].
+  double dissipated_energy() const { return dissipated_; }
   const ContactStepStats& stats() const { return stats_; }
   double max_overlap_ever() const { return max_overlap_ever_; }
   std::int64_t steps() const { return steps_; }
   std::int64_t pair_rebuilds() const { return rebuilds_; }
+  // Items whose fill pass found a different number of contacts than their count pass (0
+  // expected; see narrow_phase). Reads one int back.
+  std::int64_t fill_mismatches() const { return read_back(mismatch_, 0); }
   std::size_t bytes() const {
     return tri_v_.bytes() + edge_v_.bytes() + edge_tri_.bytes() + tri_n_.bytes() + prim_v_.bytes() +
            tri_body_.bytes() + prim_body_.bytes() + own_v_off_.bytes() + own_e_off_.bytes() +
@@ -271,7 +291,9 @@ class ContactStage {
            pc_.bytes() + pr_.bytes() + cnt_.bytes() + rec_.bytes() + ent_f_.bytes() +
            ent_v_.bytes() + vcnt_.bytes() + vcur_.bytes() + vent_.bytes() + pact_.bytes() +
            nact_.bytes() + pk1_.bytes() + pk2_.bytes() + pxi_.bytes() + nk1_.bytes() +
-           nk2_.bytes() + nxi_.bytes() + cells_.bytes() + pairs_.bytes() + vgid_.bytes();
+           nk2_.bytes() + nxi_.bytes() + pen_.bytes() + pet_.bytes() + nen_.bytes() + net_.bytes() +
+           ediss_.bytes() + ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() +
+           pr_ref_.bytes() + cells_.bytes() + pairs_.bytes() + vgid_.bytes();
   }
 
   ContactTopology topology() const {
@@ -364,19 +386,9 @@ class ContactStage {
         });
     const auto cc = pc_.cview();
     const auto rr = pr_.cview();
-    Vec3 lo, hi;
-    for (int a = 0; a < 3; ++a) {
-      const double* ca = a == 0 ? cc.x : (a == 1 ? cc.y : cc.z);
-      hi[a] = reduce_max(
-          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return ca[p]; }, -1e300);
-      lo[a] = -reduce_max(
-          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return -ca[p]; }, -1e300);
-    }
-    const double rmax = reduce_max(
-        Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return rr[p]; }, 0.0);
     // Verlet skin: the pair list built with gap D_DEM + skin stays a superset of the pairs
     // within D_DEM until some primitive's centroid has moved, plus its radius changed, by
-    // skin / 2. Checked every step (one pass); the list is rebuilt only then.
+    // skin / 2. Checked every step (one device reduction); the list is rebuilt only then.
     if (built_) {
       const auto c0 = pc_ref_.cview();
       const auto r0 = pr_ref_.cview();
@@ -389,6 +401,16 @@ class ContactStage {
           0.0);
       if (skin_ > 0 && moved <= 0.5 * skin_) return pairs_.size();
     }
+    Vec3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      const double* ca = a == 0 ? cc.x : (a == 1 ? cc.y : cc.z);
+      hi[a] = reduce_max(
+          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return ca[p]; }, -1e300);
+      lo[a] = -reduce_max(
+          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return -ca[p]; }, -1e300);
+    }
+    const double rmax = reduce_max(
+        Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return rr[p]; }, 0.0);
     skin_ = skin_setting_ >= 0 ? skin_setting_ : d_dem_ + 0.25 * rmax;
     const double gap = d_dem_ + skin_;
     // Report eq. 9-10: L_cell >= D_max + D_DEM with D_max = 2 max r (+ the skin).
@@ -429,8 +451,10 @@ class ContactStage {
         });
   }
 
-  // Records of all contacts, sorted by key, duplicates of one touch deactivated.
+  // Records of all contacts, sorted by key, duplicates of one touch deactivated. The previous
+  // step's records move to prec_ (the energy of touches that ended needs them).
   std::int64_t narrow_phase(Vec3CView x) {
+    std::swap(rec_, prec_);
     {
       const std::int64_t ntri = ntri_;
       const auto tv = tri_v_.cview();
@@ -454,17 +478,20 @@ class ContactStage {
     const auto vb = vertex_body_.cview();
     const auto vg = vgid_.cview();
     const double d_dem = d_dem_;
-    auto prim_contacts = QDEMSPH_LAMBDA(std::int64_t i, ContactRecord * out)->std::int64_t {
+    // Each writes at most `cap` records to out (if not null) and returns how many it found.
+    auto prim_contacts =
+        QDEMSPH_LAMBDA(std::int64_t i, ContactRecord * out, std::int64_t cap)->std::int64_t {
       std::int64_t n = 0;
       for (std::int64_t q = ps[i]; q < ps[i + 1]; ++q) {
         const int j = sec[q];
         for (std::int64_t ta = pto[i]; ta < pto[i + 1]; ++ta)
           for (std::int64_t tb = pto[j]; tb < pto[j + 1]; ++tb)
-            n += topo.narrow_tris(x, pt[ta], pt[tb], out ? out + n : nullptr);
+            n += topo.narrow_tris(x, pt[ta], pt[tb], out && n < cap ? out + n : nullptr, cap - n);
       }
       return n;
     };
-    auto wall_contacts = QDEMSPH_LAMBDA(std::int64_t k, ContactRecord * out)->std::int64_t {
+    auto wall_contacts =
+        QDEMSPH_LAMBDA(std::int64_t k, ContactRecord * out, std::int64_t cap)->std::int64_t {
       const int A = wv[k];
       const Vec3 xa = x[A];
       std::int64_t n = 0;
@@ -473,7 +500,7 @@ class ContactStage {
         const Vec3 nn{wall[8 * w + 3], wall[8 * w + 4], wall[8 * w + 5]};
         const double s = dot(xa - p, nn);
         if (!(s < d_dem)) continue;
-        if (out) {
+        if (out && n < cap) {
           ContactRecord& r = out[n];
           r = ContactRecord{};
           r.type = kWall;
@@ -495,18 +522,31 @@ class ContactStage {
     const auto cnt = cnt_.view();
     for_each(
         Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
-          cnt[i] = i < np ? prim_contacts(i, nullptr) : wall_contacts(i - np, nullptr);
+          cnt[i] = i < np ? prim_contacts(i, nullptr, 0) : wall_contacts(i - np, nullptr, 0);
         });
     const std::int64_t nc = exclusive_scan(Exec{}, cnt, np + nwv);
     if (rec_.size() < nc) rec_.resize(nc + nc / 4 + 64);
     const auto rec = rec_.view();
+    // The fill repeats the count's tests, so it finds the same records; should compiled code
+    // ever decide a threshold differently in the two passes (e.g. fused multiply-adds placed
+    // differently), it still writes only its slots, pads them with inactive records and counts
+    // the item in fill_mismatches (contact_stats): never a write into a neighbour's slots.
+    const auto mism = mismatch_.view();
     for_each(
         Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
           ContactRecord* out = rec.p + cnt[i];
-          if (i < np)
-            prim_contacts(i, out);
-          else
-            wall_contacts(i - np, out);
+          const std::int64_t cap = cnt[i + 1] - cnt[i];
+          const std::int64_t n =
+              i < np ? prim_contacts(i, out, cap) : wall_contacts(i - np, out, cap);
+          if (n == cap) return;
+          atomic_inc(&mism[0]);
+          for (std::int64_t k = n; k < cap; ++k) {
+            out[k] = ContactRecord{};
+            out[k].k1 = ~std::uint64_t{0};
+            out[k].k2 = static_cast<std::uint64_t>(cnt[i] + k);
+            out[k].type = kWall;
+            out[k].active = 0;
+          }
         });
     sort_records(Exec{}, rec, nc);
     // One vertex touching one body: keep the point-face hit with the largest gap.
@@ -536,7 +576,11 @@ class ContactStage {
       nk1_.resize(nc + nc / 4 + 64);
       nk2_.resize(nc + nc / 4 + 64);
       nxi_.resize(nc + nc / 4 + 64);
+      nen_.resize(nc + nc / 4 + 64);
+      net_.resize(nc + nc / 4 + 64);
+      nh_.resize(nc + nc / 4 + 64);
     }
+    if (ediss_.size() < nc) ediss_.resize(nc + nc / 4 + 64);
     const auto rec = rec_.cview();
     const auto im = inv_mass_.cview();
     const auto bmat = body_mat_.cview();
@@ -547,11 +591,14 @@ class ContactStage {
     const auto wkn = wall_kn_.cview();
     const auto pk1 = pk1_.cview(), pk2 = pk2_.cview();
     const auto pxi = pxi_.cview();
+    const auto ph = ph_.cview();
     const auto pact = pact_.cview();
     const std::int64_t nprev = n_prev_;
     const auto nk1 = nk1_.view(), nk2 = nk2_.view();
     const auto nxi = nxi_.view();
     const auto nact = nact_.view();
+    const auto nen = nen_.view(), net = net_.view(), ediss = ediss_.view();
+    const auto nh = nh_.view();
     const auto ev = ent_v_.view();
     const auto ef = ent_f_.view();
     const int nm = nm_;
@@ -563,6 +610,10 @@ class ContactStage {
           nk2[c] = r.k2;
           nxi.set(c, Vec3{});
           nact[c] = 0;
+          nen[c] = 0;
+          net[c] = 0;
+          ediss[c] = 0;
+          nh.set(c, Vec3{});
           for (int k = 0; k < 4; ++k) ev[4 * c + k] = -1;
           if (!r.active) return;
           Vec3 v1{}, v2{};
@@ -596,7 +647,7 @@ class ContactStage {
           }
           law.kt = ktr * law.kn;
           // Tangential history of this feature pair from the previous step (sorted keys).
-          Vec3 xi{};
+          Vec3 xi{}, h_old{};
           std::int64_t lo = 0, hi = nprev;
           while (lo < hi) {
             const std::int64_t mid = (lo + hi) / 2;
@@ -606,7 +657,10 @@ class ContactStage {
               hi = mid;
           }
           const bool known = lo < nprev && pk1[lo] == r.k1 && pk2[lo] == r.k2 && pact[lo];
-          if (known) xi = pxi[lo];
+          if (known) {
+            xi = pxi[lo];
+            h_old = ph[lo];
+          }
           // A touch starts with a gap above -D_DEM; a deeper one must have been a contact the
           // step before (continuity). Otherwise it is the back face of a thin body seen through
           // it, not a penetration.
@@ -614,20 +668,61 @@ class ContactStage {
           nact[c] = 1;
           const ContactForce cf =
               contact_force(law, r.n, d_dem - r.d, v1 - v2, xi, dt, 1.0 / inv_eff);
-          if (dt > 0)
-            nxi.set(c, cf.xi);
-          else
-            nxi.set(c, xi);
+          const Vec3 xi_kept = dt > 0 ? cf.xi : xi;
+          nxi.set(c, xi_kept);
+          const ContactEnergy en =
+              contact_energy(law, r.n, d_dem - r.d, v1 - v2, xi, xi_kept, h_old, cf, dt);
+          nen[c] = en.stored;
+          net[c] = en.stored_t;
+          ediss[c] = en.dissipated;
+          nh.set(c, en.h);
           for (int k = 0; k < 4; ++k) {
             ev[4 * c + k] = r.v[k];
             ef.set(4 * c + k, (k < r.n1 ? r.w[k] : -r.w[k]) * cf.f);
           }
         });
+    // Dissipation of this step: per contact, plus for each of the previous step's touches with
+    // no active successor (binary search in this step's sorted keys) its spring energy and the
+    // second half of its last h's work, -h/2 . v_rel dt at this step's velocities.
+    if (dt > 0) {
+      const auto nk1c = nk1_.cview(), nk2c = nk2_.cview();
+      const auto nactc = nact_.cview();
+      const auto pet = pet_.cview();
+      const auto ed = ediss_.cview();
+      const auto prec = prec_.cview();
+      const std::int64_t ncur = nc;
+      dissipated_ += reduce_sum(
+          Exec{}, nc > nprev ? nc : nprev, QDEMSPH_LAMBDA(std::int64_t i) {
+            double s = i < ncur ? ed[i] : 0.0;
+            if (i < nprev && pact[i]) {
+              std::int64_t lo = 0, hi = ncur;
+              while (lo < hi) {
+                const std::int64_t mid = (lo + hi) / 2;
+                if (nk1c[mid] < pk1[i] || (nk1c[mid] == pk1[i] && nk2c[mid] < pk2[i]))
+                  lo = mid + 1;
+                else
+                  hi = mid;
+              }
+              const bool kept = lo < ncur && nk1c[lo] == pk1[i] && nk2c[lo] == pk2[i] && nactc[lo];
+              if (!kept) {
+                const ContactRecord& r = prec[i];
+                Vec3 vr{};
+                for (int k = 0; k < 4; ++k)
+                  if (r.v[k] >= 0) vr += (k < r.n1 ? r.w[k] : -r.w[k]) * v[r.v[k]];
+                s += pet[i] - 0.5 * dot(ph[i], vr) * dt;
+              }
+            }
+            return s;
+          });
+    }
     // The keys and springs become the next step's history (already sorted).
     std::swap(pk1_, nk1_);
     std::swap(pk2_, nk2_);
     std::swap(pxi_, nxi_);
     std::swap(pact_, nact_);
+    std::swap(pen_, nen_);
+    std::swap(pet_, net_);
+    std::swap(ph_, nh_);
     n_prev_ = nc;
 
     // Gather per vertex: count, scan, fill, sort each vertex's entries, sum.
@@ -695,11 +790,15 @@ class ContactStage {
   CellList<Exec> cells_;
   CandidatePairs<Exec> pairs_;
   Buffer<ContactRecord> rec_{S};
-  Buffer<int> ent_v_{S}, vcnt_{S}, vcur_{S}, vent_{S};
+  Buffer<int> ent_v_{S}, vcnt_{S}, vcur_{S}, vent_{S}, mismatch_{S};
   Vec3Buffer ent_f_{S};
   Buffer<std::uint64_t> pk1_{S}, pk2_{S}, nk1_{S}, nk2_{S};
   Buffer<int> pact_{S}, nact_{S};
   Vec3Buffer pxi_{S}, nxi_{S};
+  Buffer<double> pen_{S}, nen_{S}, pet_{S}, net_{S}, ediss_{S};  // per-contact energy [J]
+  Vec3Buffer ph_{S}, nh_{S};       // per-contact non-potential force h (contact_energy) [N]
+  Buffer<ContactRecord> prec_{S};  // the previous step's records
+  double dissipated_ = 0;
   Vec3Buffer pc_ref_{S};
   Buffer<double> pr_ref_{S};
   bool built_ = false;

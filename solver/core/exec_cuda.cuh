@@ -37,10 +37,13 @@ struct CudaExec {
     if (qdemsph_err_ != cudaSuccess) ::qdemsph::cuda_fail(qdemsph_err_, what, __FILE__, __LINE__); \
   } while (0)
 
-// memory_cuda.cu: the grid cap for for_each (32 blocks per SM of the current device) and a
-// device scratch of cuda_detail::kMaxPartials + 1 doubles for the reductions.
+// memory_cuda.cu: the grid cap for for_each (32 blocks per SM of the current device), a
+// device scratch of cuda_detail::kMaxPartials + 1 doubles for the reductions, and a grow-only
+// device scratch of at least `bytes` for CUB's temporary storage (sorts, scans; one user at a
+// time: every call is ordered on the default stream).
 int cuda_grid_cap();
 double* cuda_reduce_scratch();
+void* cuda_temp_storage(std::size_t bytes);
 
 namespace cuda_detail {
 

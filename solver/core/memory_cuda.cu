@@ -93,7 +93,25 @@ struct ReduceScratch {
   double* p = nullptr;
   ~ReduceScratch() { cuda_free(p); }
 };
+struct TempStorage {
+  void* p = nullptr;
+  std::size_t bytes = 0;
+  ~TempStorage() { cuda_free(p); }
+};
 }  // namespace
+
+void* cuda_temp_storage(std::size_t bytes) {
+  static TempStorage s;
+  if (bytes > s.bytes) {
+    cuda_free(s.p);  // cudaFree waits for the device: no kernel still uses the old storage
+    s.p = nullptr;
+    s.bytes = 0;
+    const std::size_t want = bytes + bytes / 2 + 4096;
+    s.p = cuda_alloc(want);
+    s.bytes = want;
+  }
+  return s.p;
+}
 
 double* cuda_reduce_scratch() {
   static ReduceScratch s;

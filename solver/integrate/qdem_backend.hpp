@@ -84,13 +84,8 @@ class QdemBackend final : public Backend {
     flag_.resize(1);
     contact_.reset();
     if (m.contact.enabled) {
-      if constexpr (S == Space::Host) {
-        contact_ = std::make_unique<ContactStage<Exec>>();
-        contact_->upload(m);
-      } else {
-        throw InputError("the scene needs contact, which backend '" + name_ +
-                         "' does not have yet; use --backend cpu");
-      }
+      contact_ = std::make_unique<ContactStage<Exec>>();
+      contact_->upload(m);
     }
   }
 
@@ -152,8 +147,7 @@ class QdemBackend final : public Backend {
           }
           f.set(i, s);
         });
-    if constexpr (S == Space::Host)
-      if (contact_) contact_->add_forces(x_.cview(), v_.cview(), f_.view(), dt_diss);
+    if (contact_) contact_->add_forces(x_.cview(), v_.cview(), f_.view(), dt_diss);
   }
 
   // The contact stage (null when the model needs none), for tests and diagnostics.
@@ -171,7 +165,8 @@ class QdemBackend final : public Backend {
             {"active", static_cast<double>(c.active)},
             {"max_overlap", c.max_overlap},
             {"max_overlap_ever", contact_->max_overlap_ever()},
-            {"pair_rebuilds", static_cast<double>(contact_->pair_rebuilds())}};
+            {"pair_rebuilds", static_cast<double>(contact_->pair_rebuilds())},
+            {"fill_mismatches", static_cast<double>(contact_->fill_mismatches())}};
   }
 
   void kick(double h) override {
@@ -274,6 +269,10 @@ class QdemBackend final : public Backend {
                        Exec{}, nct_, QDEMSPH_LAMBDA(std::int64_t t) { return diss_t[t]; }) +
                    reduce_sum(
                        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return diss_v[i]; });
+    if (contact_) {
+      e.contact = contact_->stored_energy();
+      e.contact_dissipated = contact_->dissipated_energy();
+    }
     return e;
   }
 

@@ -16,7 +16,7 @@ ProbeWriter::ProbeWriter(const std::filesystem::path& dir, std::vector<std::stri
   if (!file_) throw InputError("cannot create '" + path_.string() + "': folder not writable");
   std::string header = "time";
   for (const auto& n : names_) header += "," + n + "_x," + n + "_y," + n + "_z";
-  header += ",kinetic,strain,potential,dissipated,total\n";
+  header += ",kinetic,strain,potential,dissipated,contact,contact_dissipated,total\n";
   std::fputs(header.c_str(), file_);
   std::fflush(file_);
 }
@@ -31,8 +31,8 @@ void ProbeWriter::write(double time, std::span<const Vec3> values, const Energie
                            std::to_string(names_.size()) + " probes");
   std::fprintf(file_, "%.10e", time);
   for (const Vec3& v : values) std::fprintf(file_, ",%.10e,%.10e,%.10e", v.x, v.y, v.z);
-  std::fprintf(file_, ",%.10e,%.10e,%.10e,%.10e,%.10e\n", e.kinetic, e.strain, e.potential,
-               e.dissipated, e.total());
+  std::fprintf(file_, ",%.10e,%.10e,%.10e,%.10e,%.10e,%.10e,%.10e\n", e.kinetic, e.strain,
+               e.potential, e.dissipated, e.contact, e.contact_dissipated, e.total());
   // Flushed per row: rows are rare next to steps, and a partial run stays plottable.
   if (std::fflush(file_) != 0)
     throw std::runtime_error("cannot write '" + path_.string() + "' (disk full?)");

@@ -3,7 +3,8 @@
 //
 // Columns: time, then <name>_x,<name>_y,<name>_z for each probe (a region-averaged
 // displacement or a centre of mass, in scene order), then the energies kinetic, strain,
-// potential, dissipated and total = their sum (physics/energies.hpp defines them).
+// potential, dissipated, contact, contact_dissipated and total = their sum
+// (physics/energies.hpp defines them).
 // Numbers are written as %.10e.
 #pragma once
 

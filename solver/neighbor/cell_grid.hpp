@@ -10,16 +10,16 @@
 // so two points closer than one cell width still land in the same or adjacent cells: the search
 // stays exact, it only gets slower for far-away particles.
 //
-// The cell-key pass is a for_each (host or device); count/scan/fill is orchestration, done
-// serially on the host here (deterministic order). A CUDA twin (atomic count, device scan,
-// stable key sort) belongs next to exec_cuda.cuh.
+// The cell-key pass is a for_each (host or device); the sort is sort_by_key: a serial counting
+// sort here (HostExec), a stable radix sort on the device in neighbor_cuda.cuh (CudaExec). Both
+// give the same order and offsets, so neighbour sums run in the same order on either backend.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <vector>
 
+#include "core/exec_host.hpp"
 #include "core/hd.hpp"
 #include "core/memory.hpp"
 #include "core/vec.hpp"
@@ -72,19 +72,23 @@ QDEMSPH_HD void for_each_near(const CellGrid& g, const std::int64_t* start, Vec3
   }
 }
 
-// Counting sort of keys in [0, ncells): stable permutation `order` and offsets `start`.
-inline void counting_sort_host(const std::vector<std::int64_t>& keys, std::int64_t ncells,
-                               std::vector<std::int64_t>& start, std::vector<std::int64_t>& order) {
-  const std::int64_t n = static_cast<std::int64_t>(keys.size());
-  start.assign(ncells + 1, 0);
-  for (std::int64_t i = 0; i < n; ++i) ++start[keys[i] + 1];           // count
-  for (std::int64_t c = 0; c < ncells; ++c) start[c + 1] += start[c];  // exclusive scan
-  std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
-  order.resize(n);
-  for (std::int64_t i = 0; i < n; ++i) order[fill[keys[i]]++] = i;  // fill
+// Stable sort of items [0, n) by key (keys[i] in [0, nkeys), n = keys.n): order[q] = the item
+// at sorted position q (increasing index among equal keys), start[k] .. start[k + 1] = the
+// positions of key k (start has nkeys + 1 entries). scratch: a work buffer the CUDA twin
+// (neighbor_cuda.cuh) resizes; the host counting sort needs none.
+inline void sort_by_key(HostExec, View<const std::int64_t> keys, std::int64_t nkeys,
+                        View<std::int64_t> start, View<std::int64_t> order,
+                        Buffer<std::int64_t>& /*scratch*/) {
+  const std::int64_t n = keys.n;
+  std::fill(start.p, start.p + nkeys + 1, std::int64_t{0});
+  for (std::int64_t i = 0; i < n; ++i) ++start[keys[i] + 1];          // count
+  for (std::int64_t c = 0; c < nkeys; ++c) start[c + 1] += start[c];  // exclusive scan
+  for (std::int64_t i = 0; i < n; ++i) order[start[keys[i]]++] = i;   // fill: start[k] -> end of k
+  for (std::int64_t c = nkeys; c > 0; --c) start[c] = start[c - 1];   // back to the beginnings
+  start[0] = 0;
 }
 
-// Cell list over a Vec3 field in memory space S: keys on the device, sort on the host.
+// Cell list over a Vec3 field in memory space S; keys, sort and offsets stay in that space.
 template <class Exec>
 class CellList {
   static constexpr Space S = Exec::space;
@@ -98,25 +102,25 @@ class CellList {
   // Builds order/start for positions x (n = x.n).
   void build(Vec3CView x) {
     const std::int64_t n = x.n;
-    if (keys_.size() != n) keys_.resize(n);
+    if (keys_.size() != n) {
+      keys_.resize(n);
+      order_.resize(n);
+    }
     const auto k = keys_.view();
     const CellGrid g = grid_;
     for_each(
         Exec{}, n, QDEMSPH_LAMBDA(std::int64_t i) { k[i] = g.key_of(x[i]); });
-    const std::vector<std::int64_t> hk = keys_.to_host();
-    counting_sort_host(hk, grid_.count(), hstart_, horder_);
-    start_.assign(hstart_);
-    order_.assign(horder_);
+    sort_by_key(Exec{}, keys_.cview(), grid_.count(), start_.view(), order_.view(), scratch_);
   }
   View<const std::int64_t> start() const { return start_.cview(); }
   View<const std::int64_t> order() const { return order_.cview(); }
-  const std::vector<std::int64_t>& host_order() const { return horder_; }
-  std::size_t bytes() const { return keys_.bytes() + start_.bytes() + order_.bytes(); }
+  std::size_t bytes() const {
+    return keys_.bytes() + start_.bytes() + order_.bytes() + scratch_.bytes();
+  }
 
  private:
   CellGrid grid_;
-  Buffer<std::int64_t> keys_{S}, start_{S}, order_{S};
-  std::vector<std::int64_t> hstart_, horder_;
+  Buffer<std::int64_t> keys_{S}, start_{S}, order_{S}, scratch_{S};
 };
 
 }  // namespace qdemsph

@@ -1,6 +1,6 @@
 // Prefix sums and atomic counters for the two-pass (count, scan, fill) builders of the
-// neighbour layer. Host versions here; the CUDA twins (cub::DeviceScan) belong next to
-// core/exec_cuda.cuh. Atomics are usable inside QDEMSPH_LAMBDA bodies on both.
+// neighbour layer. Host versions here; the CUDA twin of exclusive_scan (cub::DeviceScan) is in
+// neighbor_cuda.cuh. Atomics are usable inside QDEMSPH_LAMBDA bodies on both.
 #pragma once
 
 #include <cstdint>

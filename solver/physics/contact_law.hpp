@@ -10,6 +10,20 @@
 //   F_t <- mu F_n F_t / |F_t|,  xi <- -(F_t + c_t v_t) / k_t   (sliding)
 // The force returned acts on side 1 (v_rel = v_1 - v_2, n from side 2 towards side 1);
 // side 2 receives the opposite. ~70 flops.
+//
+// Energy (contact_energy, for the budget in physics/energies.hpp). The power of the contact
+// force on the bodies is F . v_rel (the weights that spread F over the vertices also average
+// their velocities into v_1, v_2). Split F = k_n delta n + h: the normal spring is a potential,
+// E_n = 1/2 k_n delta^2; h (tangential spring, dashpots, the cut-off while F_n is clamped at
+// zero) does work that the tangential spring stores, E_t = 1/2 k_t |xi|^2, or dissipates.
+// Velocity Verlet applies each evaluation's force over two half steps, so the work of h over a
+// step is the trapezoid of its values at the step's ends times v at the half step:
+//   stored      E = 1/2 k_n delta^2 + 1/2 k_t |xi|^2
+//   dissipated  1/2 k_t (|xi_old|^2 - |xi|^2) - (h_old + h) / 2 . v_rel dt
+// with h_old the previous evaluation's h of the same feature pair (0 for a new touch): sticking
+// without damping this is 0, the dashpots give (c_n v_n^2 + c_t |v_t|^2) dt, sliding mu F_n
+// times the slip. The budget then closes to second order in dt. A touch that ends leaves its
+// spring energy and the second half of its last h's work; the contact stage adds both.
 #pragma once
 
 #include <cstdint>
@@ -39,6 +53,14 @@ struct ContactForce {
   double fn = 0;  // normal force magnitude
 };
 
+// The old spring turned into the tangent plane of n, keeping its length.
+QDEMSPH_HD Vec3 rotate_spring(Vec3 xi_old, Vec3 n) {
+  const double l0 = norm(xi_old);
+  Vec3 xi = xi_old - dot(xi_old, n) * n;
+  const double l1 = norm(xi);
+  return l1 > 0 ? (l0 / l1) * xi : xi;
+}
+
 QDEMSPH_HD ContactForce contact_force(const ContactLaw& law, Vec3 n, double delta, Vec3 v_rel,
                                       Vec3 xi_old, double dt, double m_eff) {
   ContactForce r;
@@ -47,12 +69,7 @@ QDEMSPH_HD ContactForce contact_force(const ContactLaw& law, Vec3 n, double delt
   const double cn = 2.0 * law.zeta * sqrt(m_eff * law.kn);
   double fn = law.kn * delta - cn * vn;
   fn = fn > 0 ? fn : 0.0;
-  // Rotate the old spring into the current tangent plane, keeping its length.
-  const double l0 = norm(xi_old);
-  Vec3 xi = xi_old - dot(xi_old, n) * n;
-  const double l1 = norm(xi);
-  if (l1 > 0) xi = (l0 / l1) * xi;
-  xi += dt * vt;
+  Vec3 xi = rotate_spring(xi_old, n) + dt * vt;
   const double ct = 2.0 * law.zeta * sqrt(m_eff * law.kt);
   Vec3 ft = -law.kt * xi - ct * vt;
   const double ftn = norm(ft), lim = law.mu * fn;
@@ -64,6 +81,26 @@ QDEMSPH_HD ContactForce contact_force(const ContactLaw& law, Vec3 n, double delt
   r.xi = xi;
   r.fn = fn;
   return r;
+}
+
+struct ContactEnergy {
+  double stored = 0;      // 1/2 k_n delta^2 + 1/2 k_t |xi|^2 [J]
+  double stored_t = 0;    // the tangential part, dropped if the touch ends [J]
+  double dissipated = 0;  // over this step [J]
+  Vec3 h;                 // F - k_n delta n on side 1: the next step's h_old [N]
+};
+
+// xi_old, h_old: the feature pair's spring and h of the previous step (history); xi: the spring
+// kept after this step; cf: contact_force's result for these arguments.
+QDEMSPH_HD ContactEnergy contact_energy(const ContactLaw& law, Vec3 n, double delta, Vec3 v_rel,
+                                        Vec3 xi_old, Vec3 xi, Vec3 h_old, const ContactForce& cf,
+                                        double dt) {
+  ContactEnergy e;
+  e.h = cf.f - (law.kn * delta) * n;
+  e.stored_t = 0.5 * law.kt * norm2(xi);
+  e.stored = 0.5 * law.kn * delta * delta + e.stored_t;
+  e.dissipated = (0.5 * law.kt * norm2(xi_old) - e.stored_t) - 0.5 * dot(h_old + e.h, v_rel) * dt;
+  return e;
 }
 
 }  // namespace qdemsph

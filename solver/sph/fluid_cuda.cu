@@ -1,7 +1,7 @@
-// The SPH stage on CUDA: the same SphStage template instantiated over CudaExec. The cell sort's
-// count/scan/fill still runs on the host (keys copied back each step); a device counting sort
-// is the next step for speed.
+// The SPH stage on CUDA: the same SphStage template instantiated over CudaExec. The cell sort
+// runs on the device (sort_by_key in neighbor/neighbor_cuda.cuh): no copy to the host per step.
 #include "core/exec_cuda.cuh"
+#include "neighbor/neighbor_cuda.cuh"
 #include "sph/sph_stage.hpp"
 
 namespace qdemsph {

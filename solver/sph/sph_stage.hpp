@@ -230,12 +230,13 @@ class SphStage final : public FluidStage {
   std::size_t device_bytes() const override {
     return x_.bytes() + v_.bytes() + a_.bytes() + rho_.bytes() + p_.bytes() + drho_.bytes() +
            m_.bytes() + type_.bytes() + gid_.bytes() + tmp3_.bytes() + tmpd_.bytes() +
-           tmpu_.bytes() + tmpt_.bytes() + keys_.bytes() + start_.bytes() + order_.bytes();
+           tmpu_.bytes() + tmpt_.bytes() + keys_.bytes() + start_.bytes() + order_.bytes() +
+           scratch_.bytes();
   }
 
   // Public only because nvcc's extended lambdas need an accessible enclosing function.
-  // Counting sort by (cell, type) (neighbor/cell_grid.hpp), then every per-particle array
-  // gathered into the new order.
+  // Stable sort by (cell, type) (sort_by_key, neighbor/cell_grid.hpp), then every per-particle
+  // array gathered into the new order.
   void sort() {
     if (keys_.size() != n_) keys_.resize(n_);
     const auto k = keys_.view();
@@ -246,9 +247,8 @@ class SphStage final : public FluidStage {
         Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
           k[i] = 2 * g.key_of(x[i]) + (type[i] == kSphFluid ? 0 : 1);
         });
-    counting_sort_host(keys_.to_host(), 2 * grid_.count(), hstart_, horder_);
-    start_.assign(hstart_);
-    order_.assign(horder_);
+    if (order_.size() != n_) order_.resize(n_);
+    sort_by_key(Exec{}, keys_.cview(), 2 * grid_.count(), start_.view(), order_.view(), scratch_);
     const auto ord = order_.cview();
     permute3(x_, ord);
     permute3(v_, ord);
@@ -289,8 +289,7 @@ class SphStage final : public FluidStage {
   Buffer<std::uint8_t> type_{S}, tmpt_{S};
   Buffer<std::uint64_t> gid_{S}, tmpu_{S};
   CellGrid grid_;
-  Buffer<std::int64_t> keys_{S}, start_{S}, order_{S};
-  std::vector<std::int64_t> hstart_, horder_;
+  Buffer<std::int64_t> keys_{S}, start_{S}, order_{S}, scratch_{S};
 };
 
 }  // namespace qdemsph

@@ -194,12 +194,15 @@ TEST(ProbeWriter, HeaderAndRows) {
     std::istringstream in(slurp(dir / "probes.csv"));
     std::string line;
     std::getline(in, line);
-    EXPECT_EQ(line, "time,tip_x,tip_y,tip_z,c_x,c_y,c_z,kinetic,strain,potential,dissipated,total");
+    EXPECT_EQ(line,
+              "time,tip_x,tip_y,tip_z,c_x,c_y,c_z,kinetic,strain,potential,dissipated,contact,"
+              "contact_dissipated,total");
     std::getline(in, line);
     EXPECT_EQ(line,
               "0.0000000000e+00,1.0000000000e+00,2.0000000000e+00,3.0000000000e+00,"
               "-4.0000000000e+00,5.5000000000e+00,0.0000000000e+00,1.0000000000e+00,"
-              "2.0000000000e+00,3.0000000000e+00,4.0000000000e+00,1.0000000000e+01");
+              "2.0000000000e+00,3.0000000000e+00,4.0000000000e+00,0.0000000000e+00,"
+              "0.0000000000e+00,1.0000000000e+01");
     std::getline(in, line);
     EXPECT_EQ(line.substr(0, 16), "1.0000000000e-03");
     EXPECT_FALSE(std::getline(in, line));

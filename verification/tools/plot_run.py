@@ -16,7 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-ENERGIES = ["kinetic", "strain", "potential", "dissipated", "total"]
+ENERGIES = ["kinetic", "strain", "potential", "dissipated", "contact", "contact_dissipated", "total"]
 
 
 def title_of(run):
@@ -45,7 +45,7 @@ def plot_probes(run, cols):
         ax.legend(loc="upper right", fontsize=8)
         ax.grid(alpha=0.3)
     ax = axes[-1]
-    for e in ENERGIES:
+    for e in (e for e in ENERGIES if e in cols):  # older runs lack the contact columns
         ax.plot(t, cols[e], label=e, lw=2 if e == "total" else 1)
     ax.set_ylabel("energy [J]")
     ax.set_xlabel("time [s]")
