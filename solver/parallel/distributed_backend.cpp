@@ -79,9 +79,13 @@ struct BandCell {
 };
 
 BandCell band_cell(Vec3 p, double band) {
-  return {{static_cast<std::int64_t>(std::floor(p.x / band)),
-           static_cast<std::int64_t>(std::floor(p.y / band)),
-           static_cast<std::int64_t>(std::floor(p.z / band))}};
+  // Clamped before the conversion (a blown-up run's NaN or huge values stay defined; the
+  // run-time checks report them).
+  auto c = [&](double v) {
+    const double q = std::floor(v / band);
+    return static_cast<std::int64_t>(q > -2e6 ? (q < 2e6 ? q : 2e6) : -2e6);
+  };
+  return {{c(p.x), c(p.y), c(p.z)}};
 }
 
 // The 5^3 cells within two cells of c: any point within 2 band widths of a point of c.
