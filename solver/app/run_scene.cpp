@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <optional>
 
 #include "core/error.hpp"
@@ -138,6 +139,11 @@ void on_root(bool distributed, F&& write) {
 int run_scene(const Scene& scene, const RunOptions& opt) {
   const auto wall0 = std::chrono::steady_clock::now();
   if (scene.run.threads > 0) omp_set_num_threads(scene.run.threads);
+#ifdef QDEMSPH_HAVE_MPI
+  // Several ranks on a node share its cores: unless told otherwise, each takes its share.
+  else if (world().local_size > 1 && !std::getenv("OMP_NUM_THREADS"))
+    omp_set_num_threads(std::max(1, omp_get_num_procs() / world().local_size));
+#endif
   const Model model = build_model(scene);
   const std::string backend_name = opt.backend.value_or(scene.run.backend);
   std::unique_ptr<Backend> be = make_backend(backend_name);

@@ -33,6 +33,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <numeric>
 #include <string>
 #include <utility>
 
@@ -227,7 +228,12 @@ class ContactStage {
     for (std::int64_t w = 0; w < nw_; ++w) wk[w] = c.walls[w].stiffness;
     wall_kn_.assign(wk);
     vertex_body_.assign(m.body);
-    vgid_.assign(m.gid);
+    std::vector<std::uint64_t> vgid = m.gid;  // a model without ids: numbered by index
+    if (static_cast<std::int64_t>(vgid.size()) != nv_) {
+      vgid.resize(nv_);
+      std::iota(vgid.begin(), vgid.end(), std::uint64_t{0});
+    }
+    vgid_.assign(vgid);
     inv_mass_.assign(m.inv_mass);
     pc_.resize(np_);
     pr_.resize(np_);

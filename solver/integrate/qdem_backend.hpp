@@ -73,9 +73,12 @@ class QdemBackend final : public Backend {
     std::vector<std::int64_t> ent(off[nv_]), fill(off.begin(), off.end() - 1);
     for (int k = 0; k < 4; ++k)
       for (std::int64_t t = 0; t < nft_; ++t) ent[fill[m.tets[t][k]]++] = k * nt_ + t;
+    // (A model without tet ids, e.g. a benchmark's, is numbered by index.)
     const std::int64_t ntt = nt_;
+    const bool gids = static_cast<std::int64_t>(m.tet_gid.size()) == nt_;
     auto by_gid = [&](std::int64_t a, std::int64_t b) {
-      return a / ntt != b / ntt ? a < b : m.tet_gid[a % ntt] < m.tet_gid[b % ntt];
+      if (a / ntt != b / ntt || !gids) return a < b;
+      return m.tet_gid[a % ntt] < m.tet_gid[b % ntt];
     };
     for (std::int64_t i = 0; i < nv_; ++i)
       std::sort(ent.begin() + off[i], ent.begin() + off[i + 1], by_gid);

@@ -39,7 +39,7 @@ struct SfcGrid {
   QDEMSPH_HD std::uint32_t coord(double p, double p0) const {
     const double c = std::floor((p - p0) / h);
     const double top = static_cast<double>(side() - 1);
-    return static_cast<std::uint32_t>(c < 0 ? 0 : (c > top ? top : c));
+    return static_cast<std::uint32_t>(!(c > 0) ? 0 : (c > top ? top : c));  // NaN: cell 0
   }
   QDEMSPH_HD std::uint64_t key(Vec3 p) const {
     return sfc_key(curve, coord(p.x, lo.x), coord(p.y, lo.y), coord(p.z, lo.z), order);

@@ -79,9 +79,13 @@ struct BandCell {
 };
 
 BandCell band_cell(Vec3 p, double band) {
-  return {{static_cast<std::int64_t>(std::floor(p.x / band)),
-           static_cast<std::int64_t>(std::floor(p.y / band)),
-           static_cast<std::int64_t>(std::floor(p.z / band))}};
+  // Clamped before the conversion (a blown-up run's NaN or huge values stay defined; the
+  // run-time checks report them).
+  auto c = [&](double v) {
+    const double q = std::floor(v / band);
+    return static_cast<std::int64_t>(q > -2e6 ? (q < 2e6 ? q : 2e6) : -2e6);
+  };
+  return {{c(p.x), c(p.y), c(p.z)}};
 }
 
 // The 5^3 cells within two cells of c: any point within 2 band widths of a point of c.
@@ -168,7 +172,7 @@ class DistributedImpl final : public DistributedBackend {
 
   void adopt(const StateSlice& s) override {
     if (!g_) throw std::logic_error("DistributedBackend::adopt before upload");
-    redistribute(s, true);
+    redistribute(s, true, true);
   }
 
   // ---- stages ------------------------------------------------------------------------------
@@ -351,7 +355,11 @@ class DistributedImpl final : public DistributedBackend {
   // ---- records and the checkpoint hook -----------------------------------------------------
 
   ParallelRecord record(const std::map<std::string, double>& run_phases) override {
-    if (steps_ > window_start_) measure_window();
+    // The last full window stands unless none was measured, a rebalance awaits its "after",
+    // or at least half a window has passed since (a step or two is noise, not imbalance).
+    const std::int64_t since = steps_ - window_start_;
+    if (since > 0 && (windows_ == 0 || pending_after_ || 2 * since >= opt_.rebalance_every))
+      measure_window();
     ParallelRecord r;
     r.ranks = np_;
     r.curve = curve_name(curve_);
@@ -517,7 +525,9 @@ class DistributedImpl final : public DistributedBackend {
     if (!rebuild && !rebalance) return;
     const std::int64_t before = migrated_bytes_;
     StateSlice s = export_state();
-    redistribute(s, rebalance);
+    // A new cut that moves no vertex (timing noise) keeps the rank's model; a moved band
+    // always rebuilds the ghosts.
+    redistribute(s, rebalance, rebuild);
     if (rebalance) {
       ++rebalances_;
       log_.push_back({steps_, last_imbalance_, predicted_after_, migrated_bytes_ - before});
@@ -564,8 +574,9 @@ class DistributedImpl final : public DistributedBackend {
 
   // Moves the state in `s` (any distribution over the ranks) to its owners and installs the
   // rank's new part. rebalance: a new partition from the measured costs first; otherwise the
-  // owners are re-read from the current partition at the current positions.
-  void redistribute(const StateSlice& s, bool rebalance) {
+  // owners are re-read from the current partition at the current positions. Unless `always`,
+  // nothing is rebuilt when no vertex changes owner.
+  void redistribute(const StateSlice& s, bool rebalance, bool always) {
     const std::int64_t nsv = static_cast<std::int64_t>(s.vertex.size());
     if (rebalance || dec_.splitters.empty()) {
       auto scope = timers_.scope("balance");
@@ -586,8 +597,12 @@ class DistributedImpl final : public DistributedBackend {
       dest[k] = dec_.owner(s.x[k]);
       if (owner_[s.vertex[k]] != dest[k]) changed.push_back({s.vertex[k], dest[k]});
     }
-    for (const auto& [gv, r] : allgatherv(comm_, changed, &bytes))
-      owner_[gv] = static_cast<std::int32_t>(r);
+    const auto all_changed = allgatherv(comm_, changed, &bytes);
+    for (const auto& [gv, r] : all_changed) owner_[gv] = static_cast<std::int32_t>(r);
+    if (all_changed.empty() && !always) {
+      migrated_bytes_ += bytes;
+      return;
+    }
 
     // Vertices: x, v, dissipation (and the relaxation start state while relaxing).
     int relax = !s.x0.empty(), any_relax = 0;

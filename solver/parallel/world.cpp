@@ -26,6 +26,10 @@ const World& world_start(int* argc, char*** argv) {
   g_world.mpi = true;
   MPI_Comm_rank(MPI_COMM_WORLD, &g_world.rank);
   MPI_Comm_size(MPI_COMM_WORLD, &g_world.size);
+  MPI_Comm node;
+  MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, g_world.rank, MPI_INFO_NULL, &node);
+  MPI_Comm_size(node, &g_world.local_size);
+  MPI_Comm_free(&node);
   return g_world;
 }
 

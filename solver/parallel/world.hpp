@@ -8,7 +8,8 @@ namespace qdemsph {
 
 struct World {
   int rank = 0, size = 1;
-  bool mpi = false;  // MPI_Init was called
+  int local_size = 1;  // ranks on this node (MPI_COMM_TYPE_SHARED)
+  bool mpi = false;    // MPI_Init was called
   bool root() const { return rank == 0; }
 };
 
