@@ -26,6 +26,7 @@ run: build
 
 unit: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+	@$(PY) -m pytest scaling/tests -q -p no:cacheprovider
 
 verify: build
 	@$(PY) -m pytest verification -q $(if $(filter 1,$(FULL)),--full,) --qdemsph $(BUILD)/bin/qdemsph \
