@@ -347,6 +347,14 @@ class ContactStage {
     pk2_.assign(h.k2);
     pxi_.assign(h.xi);
     pact_.assign(std::vector<int>(n, 1));
+    // Energy bookkeeping of the restored contacts starts afresh (trajectories are unaffected).
+    pen_.assign(std::vector<double>(n, 0.0));
+    pet_.assign(std::vector<double>(n, 0.0));
+    ph_.assign(std::vector<Vec3>(n));
+    std::vector<ContactRecord> rec(n);
+    for (std::int64_t c = 0; c < n; ++c)
+      for (int k = 0; k < 4; ++k) rec[c].v[k] = h.v[c][k];
+    rec_.assign(rec);
     n_prev_ = n;
   }
 
