@@ -12,7 +12,9 @@
 #include "core/gpu_info.hpp"
 #include "core/progress.hpp"
 #include "integrate/backend.hpp"
+#include "integrate/restart.hpp"
 #include "integrate/stepper.hpp"
+#include "io/checkpoint_h5.hpp"
 #include "io/fields_h5.hpp"
 #include "io/fluid_h5.hpp"
 #include "io/json.hpp"
@@ -131,23 +133,51 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     fluid = make_fluid_stage(backend_name, *fluid_setup);
   }
   const std::filesystem::path dir = opt.out.value_or(scene.output.dir);
+  const CheckpointSpec& cks = scene.output.checkpoint;
+  const std::filesystem::path ckpt_dir = cks.dir.empty() ? dir / "checkpoints" : cks.dir;
+  const FluidSetup* fsetup = fluid_setup ? &*fluid_setup : nullptr;
+  // A restart is checked against the scene before any output is touched.
+  std::optional<Checkpoint> restart;
+  std::filesystem::path restart_path;
+  if (opt.restart) {
+    if (scene.run.mode == RunMode::Static)
+      throw InputError("--restart: a static run (run.mode: static) has no checkpoints");
+    if (*opt.restart == "latest") {
+      restart = read_latest_checkpoint(ckpt_dir, restart_path);
+    } else {
+      restart_path = *opt.restart;
+      restart = read_checkpoint(restart_path);
+    }
+    check_checkpoint(*restart, restart_path.string(), scene, model, dt, fsetup);
+  }
+  const CheckpointOutput resume = restart ? restart->output : CheckpointOutput{-1, -1, -1, -1};
   const auto probes = resolve_probes(scene, model);
   std::vector<std::string> names;
   for (const auto& p : scene.probes) names.push_back(p.name);
 
-  FieldWriter fields(dir, model.X, model.tets, model.body);
-  ProbeWriter probe_csv(dir, names);
+  FieldWriter fields(dir, model.X, model.tets, model.body, resume.field_frames);
+  ProbeWriter probe_csv(dir, names, resume.probes_bytes);
   Stepper st(model, *be, dt);
   PhaseTimers& timers = st.timers();
   std::optional<FluidWriter> fluid_out;
   std::FILE* fluid_csv = nullptr;
   if (fluid) {
     st.attach_fluid(fluid.get());
-    fluid_out.emplace(dir);
-    fluid_csv = std::fopen((dir / "fluid.csv").c_str(), "w");
-    if (!fluid_csv) throw InputError("cannot create '" + (dir / "fluid.csv").string() + "'");
-    std::fputs("time,kinetic,px,py,pz,v_max,rho_dev,x_max,y_max,dt_limit\n", fluid_csv);
+    fluid_out.emplace(dir, resume.fluid_frames);
+    const std::string header = "time,kinetic,px,py,pz,v_max,rho_dev,x_max,y_max,dt_limit\n";
+    if (resume.fluid_csv_bytes >= 0) {
+      fluid_csv = reopen_for_append(dir / "fluid.csv", resume.fluid_csv_bytes, header);
+    } else {
+      fluid_csv = std::fopen((dir / "fluid.csv").c_str(), "w");
+      if (!fluid_csv) throw InputError("cannot create '" + (dir / "fluid.csv").string() + "'");
+      std::fputs(header.c_str(), fluid_csv);
+    }
   }
+  if (restart)
+    restore_checkpoint(*restart, restart_path.string(), scene, model, dt, *be, fluid.get(), fsetup,
+                       st);
+  std::optional<CheckpointSeries> checkpoints;
+  if (cks.enabled && scene.run.mode == RunMode::Dynamic) checkpoints.emplace(ckpt_dir, cks.keep);
 
   Json summary = Json::object();
   summary["scene"] = scene.file.string();
@@ -176,6 +206,11 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     summary["fluid"] = fj;
   }
   summary["device_bytes"] = be->device_bytes();
+  if (restart) {
+    summary["restarted_from"]["file"] = restart_path.string();
+    summary["restarted_from"]["step"] = restart->step;
+    summary["restarted_from"]["time"] = restart->time;
+  }
 
   auto write_fields = [&](bool stress) {
     auto scope = timers.scope("output");
@@ -277,7 +312,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       finish(r.converged ? "converged" : "not_converged", r.iterations);
       return code;
     }
-    if (preload) {
+    if (preload && !restart) {
       const RelaxResult r =
           st.relax(scene.run.static_tolerance, scene.run.static_max_steps, true, relax_progress);
       progress.finish();
@@ -291,10 +326,26 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     const double probe_dt = scene.output.probes_every;
     const double field_dt = scene.output.fields_every;
     double next_probe = probe_dt, next_field = field_dt;
-    write_probes();
-    write_fields(true);
+    if (restart) {
+      next_probe = resume.next_probe;
+      next_field = resume.next_field;
+    } else {
+      write_probes();
+      write_fields(true);
+    }
+    auto last_checkpoint = std::chrono::steady_clock::now();
+    auto checkpoint = [&] {
+      auto scope = timers.scope("checkpoint");
+      Checkpoint c = capture_checkpoint(scene, model, dt, *be, fluid.get(), fsetup, st);
+      c.output = {
+          probe_csv.bytes(), fluid_csv ? static_cast<std::int64_t>(std::ftell(fluid_csv)) : -1,
+          fields.frames(),   fluid_out ? fluid_out->frames() : 0,
+          next_probe,        next_field};
+      checkpoints->write(c);
+      last_checkpoint = std::chrono::steady_clock::now();
+    };
     const auto nsteps = static_cast<std::int64_t>(std::ceil(end / dt - 1e-9));
-    for (std::int64_t n = 1; n <= nsteps; ++n) {
+    for (std::int64_t n = st.steps() + 1; n <= nsteps; ++n) {
       st.step();
       const double t = st.time();
       if (probe_dt > 0 ? t >= next_probe - 1e-12 * end : n % 100 == 0 || n == nsteps) {
@@ -305,6 +356,12 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
         write_fields(true);
         next_field += field_dt;
       }
+      if (checkpoints &&
+          ((cks.every_steps > 0 && n % cks.every_steps == 0) ||
+           (cks.every_seconds > 0 &&
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint)
+                    .count() >= cks.every_seconds)))
+        checkpoint();
       progress.update(static_cast<double>(n) / nsteps, n, fmt::format("t = {:.4g} s", t).c_str());
     }
     st.check();

@@ -30,6 +30,8 @@
 
 #include "contact/contact_record.hpp"
 #include "contact/contact_sort_host.hpp"
+#include "contact/contact_state.hpp"
+#include "core/error.hpp"
 #include "core/memory.hpp"
 #include "core/timers.hpp"
 #include "model/model.hpp"
@@ -256,6 +258,62 @@ class ContactStage {
     ++steps_;
   }
 
+  // The state between steps (checkpoints): the active tangential history and the pair list's
+  // reference; load_state (after upload) restores both, so the next step is bit-identical.
+  ContactState save_state() const {
+    ContactState s;
+    const std::vector<std::uint64_t> k1 = pk1_.to_host(), k2 = pk2_.to_host();
+    const std::vector<Vec3> xi = pxi_.to_host();
+    const std::vector<int> act = pact_.to_host();
+    for (std::int64_t c = 0; c < n_prev_; ++c)
+      if (act[c]) {  // an inactive record's spring is zero and never looked up
+        s.k1.push_back(k1[c]);
+        s.k2.push_back(k2[c]);
+        s.xi.push_back(xi[c]);
+      }
+    if (built_) {
+      s.ref_centroid = pc_ref_.to_host();
+      s.ref_radius = pr_ref_.to_host();
+    }
+    s.skin = skin_;
+    s.rebuilds = rebuilds_;
+    s.steps = steps_;
+    s.pairs = stats_.pairs;
+    s.contacts = stats_.contacts;
+    s.active = stats_.active;
+    s.max_overlap = stats_.max_overlap;
+    s.max_overlap_ever = max_overlap_ever_;
+    return s;
+  }
+
+  void load_state(const ContactState& s) {
+    const auto n = static_cast<std::int64_t>(s.k1.size());
+    const auto nref = static_cast<std::int64_t>(s.ref_centroid.size());
+    if (static_cast<std::int64_t>(s.k2.size()) != n ||
+        static_cast<std::int64_t>(s.xi.size()) != n || (nref != 0 && nref != np_) ||
+        static_cast<std::int64_t>(s.ref_radius.size()) != nref)
+      throw InputError("contact state does not fit the model (history or primitive count)");
+    pk1_.assign(s.k1);
+    pk2_.assign(s.k2);
+    pxi_.assign(s.xi);
+    pact_.assign(std::vector<int>(n, 1));
+    n_prev_ = n;
+    skin_ = s.skin;
+    built_ = nref > 0;
+    if (built_) {
+      pc_ref_.assign(s.ref_centroid);
+      pr_ref_.assign(s.ref_radius);
+      build_pairs();
+    }
+    rebuilds_ = s.rebuilds;
+    steps_ = s.steps;
+    stats_.pairs = s.pairs;
+    stats_.contacts = s.contacts;
+    stats_.active = s.active;
+    stats_.max_overlap = s.max_overlap;
+    max_overlap_ever_ = s.max_overlap_ever;
+  }
+
   const std::map<std::string, double>& seconds() const { return timers_.seconds(); }
   const ContactStepStats& stats() const { return stats_; }
   double max_overlap_ever() const { return max_overlap_ever_; }
@@ -334,16 +392,6 @@ class ContactStage {
         });
     const auto cc = pc_.cview();
     const auto rr = pr_.cview();
-    Vec3 lo, hi;
-    for (int a = 0; a < 3; ++a) {
-      const double* ca = a == 0 ? cc.x : (a == 1 ? cc.y : cc.z);
-      hi[a] = reduce_max(
-          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return ca[p]; }, -1e300);
-      lo[a] = -reduce_max(
-          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return -ca[p]; }, -1e300);
-    }
-    const double rmax = reduce_max(
-        Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return rr[p]; }, 0.0);
     // Verlet skin: the pair list built with gap D_DEM + skin stays a superset of the pairs
     // within D_DEM until some primitive's centroid has moved, plus its radius changed, by
     // skin / 2. Checked every step (one pass); the list is rebuilt only then.
@@ -359,7 +407,40 @@ class ContactStage {
           0.0);
       if (skin_ > 0 && moved <= 0.5 * skin_) return pairs_.size();
     }
+    {
+      const auto c0 = pc_ref_.view();
+      const auto r0 = pr_ref_.view();
+      for_each(
+          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) {
+            c0.set(p, cc[p]);
+            r0[p] = rr[p];
+          });
+    }
+    const double rmax = reduce_max(
+        Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return rr[p]; }, 0.0);
     skin_ = skin_setting_ >= 0 ? skin_setting_ : d_dem_ + 0.25 * rmax;
+    built_ = true;
+    ++rebuilds_;
+    return build_pairs();
+  }
+
+  // The candidate pairs of the centroids and radii of the last rebuild (pc_ref_, pr_ref_) with
+  // gap D_DEM + skin: a function of those arrays only, so load_state rebuilds the same list.
+  std::int64_t build_pairs() {
+    const std::int64_t np = np_;
+    const auto pv = prim_v_.cview();
+    const auto cc = pc_ref_.cview();
+    const auto rr = pr_ref_.cview();
+    Vec3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      const double* ca = a == 0 ? cc.x : (a == 1 ? cc.y : cc.z);
+      hi[a] = reduce_max(
+          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return ca[p]; }, -1e300);
+      lo[a] = -reduce_max(
+          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return -ca[p]; }, -1e300);
+    }
+    const double rmax = reduce_max(
+        Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return rr[p]; }, 0.0);
     const double gap = d_dem_ + skin_;
     // Report eq. 9-10: L_cell >= D_max + D_DEM with D_max = 2 max r (+ the skin).
     const double L = (2 * rmax + gap) * (1 + 1e-9) + 1e-300;
@@ -371,17 +452,6 @@ class ContactStage {
     const auto pvv = pv;
     // Only primitives of free bodies start a pair (they come first): a fixed-fixed pair is
     // never needed, and a free-fixed pair (i < npf <= j) is found from its free side.
-    {
-      const auto c0 = pc_ref_.view();
-      const auto r0 = pr_ref_.view();
-      for_each(
-          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) {
-            c0.set(p, cc[p]);
-            r0[p] = rr[p];
-          });
-    }
-    built_ = true;
-    ++rebuilds_;
     return pairs_.build(
         cells_, cc, rr, gap, npf_, QDEMSPH_LAMBDA(std::int64_t i, std::int64_t j)->bool {
           const int bi = pb[i], bj = pb[j];

@@ -7,9 +7,11 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "contact/contact_state.hpp"
 #include "core/vec.hpp"
 #include "model/model.hpp"
 #include "physics/energies.hpp"
@@ -27,6 +29,16 @@ struct HostFields {
   std::vector<Vec3> x, v;
   std::vector<std::array<double, 6>> stress;  // Cauchy: xx, yy, zz, yz, xz, xy
   std::vector<double> von_mises;
+};
+
+// The solid state between two steps, in the model's local order: what a checkpoint needs to
+// continue a dynamic run bit-identically (io/checkpoint_h5.hpp). Vertex fields [n_vertices]:
+// position, velocity, the force of the last evaluation (the next half kick uses it) and the
+// mass-damping dissipation; per-tet viscous dissipation [n_tets]; the contact stage's state.
+struct SolidState {
+  std::vector<Vec3> x, v, f;
+  std::vector<double> dissipated_v, dissipated_t;
+  std::optional<ContactState> contact;  // present when the model has contact
 };
 
 class Backend {
@@ -55,6 +67,10 @@ class Backend {
   // -1, or a tet whose det F <= 0 in the last compute_forces (clears the flag).
   virtual std::int64_t take_inverted_tet() = 0;
   virtual HostFields download(bool with_stress) = 0;
+  // Checkpoint/restart: load_state after upload (and after the Stepper's first force
+  // evaluation) restores a saved state exactly; InputError when the sizes do not fit.
+  virtual SolidState save_state() = 0;
+  virtual void load_state(const SolidState& state) = 0;
   virtual void sync() = 0;
   virtual std::size_t device_bytes() const = 0;
   // Wall time of sub-stages run inside compute_forces (e.g. "contact.broad"), cumulative.

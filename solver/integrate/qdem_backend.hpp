@@ -324,6 +324,34 @@ class QdemBackend final : public Backend {
     return h;
   }
 
+  SolidState save_state() override {
+    SolidState s;
+    s.x = x_.to_host();
+    s.v = v_.to_host();
+    s.f = f_.to_host();
+    s.dissipated_v = diss_v_.to_host();
+    s.dissipated_t = diss_t_.to_host();
+    if (contact_) s.contact = contact_->save_state();
+    return s;
+  }
+
+  void load_state(const SolidState& s) override {
+    const auto fits = [](const auto& a, std::int64_t n) {
+      return static_cast<std::int64_t>(a.size()) == n;
+    };
+    if (!fits(s.x, nv_) || !fits(s.v, nv_) || !fits(s.f, nv_) || !fits(s.dissipated_v, nv_) ||
+        !fits(s.dissipated_t, nt_) || s.contact.has_value() != (contact_ != nullptr))
+      throw InputError("solid state does not fit the model (vertex, tet or contact counts)");
+    x_.assign(s.x);
+    v_.assign(s.v);
+    f_.assign(s.f);
+    diss_v_.assign(s.dissipated_v);
+    diss_t_.assign(s.dissipated_t);
+    if (contact_) {
+      if constexpr (S == Space::Host) contact_->load_state(*s.contact);
+    }
+  }
+
   void sync() override { exec_sync(Exec{}); }
 
   std::size_t device_bytes() const override {
