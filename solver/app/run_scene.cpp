@@ -212,8 +212,12 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     summary["restarted_from"]["time"] = restart->time;
   }
 
+  // The step of the last field frame and probe row (the end of the run adds them once).
+  std::int64_t last_field_step = restart ? resume.last_field_step : -1;
+  std::int64_t last_probe_step = restart ? resume.last_probe_step : -1;
   auto write_fields = [&](bool stress) {
     auto scope = timers.scope("output");
+    last_field_step = st.steps();
     const HostFields h = be->download(stress);
     fields.write(st.time(), st.steps(), h.x, h.v, h.stress, h.von_mises);
     if (fluid) {
@@ -223,6 +227,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   };
   auto write_probes = [&] {
     auto scope = timers.scope("output");
+    last_probe_step = st.steps();
     const HostFields h = be->download(false);
     probe_csv.write(st.time(), evaluate_probes(probes, model, h.x), be->energies());
     if (fluid) {
@@ -340,7 +345,8 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       c.output = {
           probe_csv.bytes(), fluid_csv ? static_cast<std::int64_t>(std::ftell(fluid_csv)) : -1,
           fields.frames(),   fluid_out ? fluid_out->frames() : 0,
-          next_probe,        next_field};
+          next_probe,        next_field,
+          last_probe_step,   last_field_step};
       checkpoints->write(c);
       last_checkpoint = std::chrono::steady_clock::now();
     };
@@ -348,11 +354,13 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     for (std::int64_t n = st.steps() + 1; n <= nsteps; ++n) {
       st.step();
       const double t = st.time();
-      if (probe_dt > 0 ? t >= next_probe - 1e-12 * end : n % 100 == 0 || n == nsteps) {
+      // Periodic output only: the run's last row and frame follow the loop, so a checkpoint
+      // taken at a run's last step continues exactly like one taken mid-run.
+      if (probe_dt > 0 ? t >= next_probe - 1e-12 * end : n % 100 == 0) {
         write_probes();
         next_probe += probe_dt;
       }
-      if (field_dt > 0 && t >= next_field - 1e-12 * end && n != nsteps) {
+      if (field_dt > 0 && t >= next_field - 1e-12 * end) {
         write_fields(true);
         next_field += field_dt;
       }
@@ -366,7 +374,8 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     }
     st.check();
     progress.finish();
-    write_fields(true);
+    if (probe_dt == 0 && last_probe_step != st.steps()) write_probes();
+    if (last_field_step != st.steps()) write_fields(true);
     finish("completed", st.steps());
   } catch (const SimulationError& e) {
     progress.finish();

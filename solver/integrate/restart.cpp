@@ -79,6 +79,18 @@ Fingerprint make_fingerprint(const Scene& scene, const Model& m, double dt,
                      "primitives, {} walls",
                      c.d_dem, broad_phase_name(c.mode), c.self_contact, c.tri_v.size(),
                      c.edges.size(), c.prim_v.size(), c.walls.size()));
+    const ContactSpec& cs = scene.contact;
+    item("contact settings",
+         fmt::format("mu {}, restitution {}, stiffness_factor {}, skin {}, {} material pairs",
+                     cs.mu, cs.restitution, cs.stiffness_factor,
+                     cs.skin ? fmt::format("{}", *cs.skin) : "auto", cs.pairs.size()));
+    for (std::size_t w = 0; w < c.walls.size(); ++w) {
+      const ContactWall& cw = c.walls[w];
+      item(fmt::format("wall {}", w),
+           fmt::format("point {} {} {}, normal {} {} {}, mu {}, damping ratio {}, stiffness {}",
+                       cw.point.x, cw.point.y, cw.point.z, cw.normal.x, cw.normal.y, cw.normal.z,
+                       cw.mu, cw.zeta, cw.stiffness));
+    }
     Hash h;
     h.add(c.kn_factor).add(c.kt_ratio).add(c.skin).add(c.pair_mu).add(c.pair_zeta);
     h.add(c.pair_kn).add(c.pair_E).add(c.body_h).add(c.tri_v).add(c.prim_v);

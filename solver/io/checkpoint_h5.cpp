@@ -109,6 +109,8 @@ void write_contents(hid_t file, const Checkpoint& c) {
     h5::write_attribute<std::int64_t>(g.id, "fluid_frames", o.fluid_frames);
     h5::write_attribute<double>(g.id, "next_probe", o.next_probe);
     h5::write_attribute<double>(g.id, "next_field", o.next_field);
+    h5::write_attribute<std::int64_t>(g.id, "last_probe_step", o.last_probe_step);
+    h5::write_attribute<std::int64_t>(g.id, "last_field_step", o.last_field_step);
   }
 }
 
@@ -187,6 +189,8 @@ Checkpoint read_contents(hid_t file) {
     o.fluid_frames = h5::read_attribute<std::int64_t>(g.id, "fluid_frames");
     o.next_probe = h5::read_attribute<double>(g.id, "next_probe");
     o.next_field = h5::read_attribute<double>(g.id, "next_field");
+    o.last_probe_step = h5::read_attribute<std::int64_t>(g.id, "last_probe_step");
+    o.last_field_step = h5::read_attribute<std::int64_t>(g.id, "last_field_step");
   }
   return c;
 }

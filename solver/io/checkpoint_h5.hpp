@@ -12,8 +12,8 @@
 //                    pairs, contacts, active (int64)
 //   /fluid/          (SPH scenes) gid (n) uint64, type (n) uint8, x v a (n,3), rho p m (n), in
 //                    the solver's particle order (the next step's summation order)
-//   /output/         attributes probes_bytes, fluid_csv_bytes, field_frames, fluid_frames
-//                    (int64), next_probe, next_field (double)
+//   /output/         attributes probes_bytes, fluid_csv_bytes, field_frames, fluid_frames,
+//                    last_probe_step, last_field_step (int64), next_probe, next_field (double)
 // Everything is keyed by global ids (vertex, tet, particle; contact features by their
 // vertices' ids), so a distributed run can map the state to any rank layout.
 //
@@ -46,7 +46,8 @@ struct CheckpointOutput {
   std::int64_t probes_bytes = -1;     // length of probes.csv at the checkpoint (-1: none)
   std::int64_t fluid_csv_bytes = -1;  // length of fluid.csv (-1: none)
   std::int64_t field_frames = 0, fluid_frames = 0;
-  double next_probe = 0, next_field = 0;  // the run loop's next output times
+  double next_probe = 0, next_field = 0;                    // the run loop's next output times
+  std::int64_t last_probe_step = -1, last_field_step = -1;  // steps of the last row and frame
 };
 
 struct Checkpoint {
