@@ -205,3 +205,18 @@ def test_changed_scene_is_refused(qdemsph, checks, case_out):
     checks.check("outputs_untouched", 1.0 if before == after else 0.0, kind="min", tolerance=1.0, unit="bool",
                  note=", ".join(sorted(before)))
     checks.require()
+
+
+def test_wall_clock_interval_writes_checkpoints(qdemsph, checks, case_out):
+    """output.checkpoint.every_seconds: checkpoints by wall-clock time, the newest `keep` kept."""
+    out = case_out / "run"
+    p = run(qdemsph, HERE / "scene_contact.yaml", out, sets=["run.end_time=0.04",
+            "output.checkpoint={every_seconds: 0.01, keep: 3}"], log=case_out / "harness.log")
+    assert p.returncode == 0, p.stderr
+    files = sorted((out / "checkpoints").glob("checkpoint_*.h5"))
+    steps = [int(f.stem.split("_")[1]) for f in files]
+    checks.check("checkpoints_kept", len(files), kind="range", tolerance=[2, 3], unit="files",
+                 note=f"steps {steps}; keep 3")
+    checks.check("all_readable", 1.0 if all(readable(f) for f in files) else 0.0, kind="min", tolerance=1.0,
+                 unit="bool")
+    checks.require()
