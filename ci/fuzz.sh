@@ -5,7 +5,8 @@
 #   ci/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]     (default 60 s; targets: all)
 #
 # Targets: fuzz_scene (parse_scene on arbitrary YAML text), fuzz_scene_overrides (--set
-# overrides on a valid scene), fuzz_gmsh (read_gmsh on arbitrary .msh bytes). Seed corpora:
+# overrides on a valid scene), fuzz_gmsh (qdemsph's .msh reader on arbitrary bytes; no libgmsh).
+# Seed corpora:
 # solver/tests/data/scenes/{good,bad}/*.yaml and solver/fuzz/corpus/<target>/ (checked-in
 # seeds); the grown corpus is kept in build-fuzz/corpus/<target>/ between runs (CI may cache
 # it). Fails (exit 1) on a crash, a sanitizer report (ASan, UBSan, LeakSanitizer), an input
@@ -25,7 +26,7 @@ mkdir -p "$OUT/obj" "$OUT/artifacts" "$OUT/corpus"
 FLAGS=(-std=c++20 -g -O1 -fno-omit-frame-pointer -fsanitize=address,undefined
        -fno-sanitize-recover=undefined -Isolver)
 declare -A SRC=([scene]=solver/io/scene_yaml.cpp [gmsh]=solver/mesh/gmsh_io.cpp
-                [msh_precheck]=solver/mesh/msh_precheck.cpp)
+                [msh_reader]=solver/mesh/msh_reader.cpp)
 t0=$(date +%s)
 for k in "${!SRC[@]}"; do
   o="$OUT/obj/$k.o"
@@ -34,8 +35,8 @@ for k in "${!SRC[@]}"; do
   fi
 done
 declare -A OBJS=([fuzz_scene]="$OUT/obj/scene.o" [fuzz_scene_overrides]="$OUT/obj/scene.o"
-                 [fuzz_gmsh]="$OUT/obj/gmsh.o $OUT/obj/msh_precheck.o")
-declare -A LIBS=([fuzz_scene]="-lyaml-cpp" [fuzz_scene_overrides]="-lyaml-cpp" [fuzz_gmsh]="-lgmsh")
+                 [fuzz_gmsh]="$OUT/obj/gmsh.o $OUT/obj/msh_reader.o")
+declare -A LIBS=([fuzz_scene]="-lyaml-cpp" [fuzz_scene_overrides]="-lyaml-cpp" [fuzz_gmsh]="")
 for t in "${TARGETS[@]}"; do
   [[ -n ${OBJS[$t]:-} ]] || { echo "fuzz.sh: unknown target '$t'" >&2; exit 2; }
   # shellcheck disable=SC2086
@@ -57,6 +58,8 @@ for t in "${TARGETS[@]}"; do
   if [[ $t == fuzz_scene ]]; then
     seeds+=(solver/tests/data/scenes/good solver/tests/data/scenes/bad)
   fi
+  # The reproducers of past findings run first, every time.
+  [[ $t == fuzz_gmsh ]] && seeds+=(solver/fuzz/crashes)
   dict=()
   [[ -f solver/fuzz/$t.dict ]] && dict=(-dict="solver/fuzz/$t.dict")
   s0=$(date +%s)
@@ -69,12 +72,14 @@ for t in "${TARGETS[@]}"; do
   s1=$(date +%s)
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$OUT/$t.log" | grep -o '[0-9]*$' || true)
   cov=$(grep -o 'cov: [0-9]*' "$OUT/$t.log" | tail -1 || true)
+  rss=$(grep -o 'stat::peak_rss_mb: *[0-9]*' "$OUT/$t.log" | grep -o '[0-9]*$' || true)
   if [[ $trc -ne 0 ]]; then
     echo "fuzz.sh: $t FAILED (exit $trc) after $((s1 - s0)) s; log $OUT/$t.log, reproducer in $art/:"
     grep -E 'ERROR|SUMMARY|runtime error|escaped|Test unit written' "$OUT/$t.log" | head -20
     rc=1
   else
-    echo "fuzz.sh: $t ok: ${execs:-?} inputs in $((s1 - s0)) s, $cov, corpus $(ls "$corpus" | wc -l) files"
+    echo "fuzz.sh: $t ok: ${execs:-?} inputs in $((s1 - s0)) s, $cov, peak RSS ${rss:-?} MB," \
+         "corpus $(ls "$corpus" | wc -l) files"
   fi
 done
 exit $rc

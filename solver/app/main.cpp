@@ -43,12 +43,15 @@ int main(int argc, char** argv) {
   };
 
   RunOptions ropt;
-  std::string out_dir, backend;
+  std::string out_dir, backend, restart;
   auto* run = app.add_subcommand("run", "run a scene");
   add_scene(run);
   run->add_option("-o,--out", out_dir, "output folder (default: the scene's output.dir)");
   run->add_option("-b,--backend", backend, "cpu or cuda (default: the scene's run.backend)");
   run->add_flag("-q,--quiet", ropt.quiet, "no progress line or final message");
+  run->add_option("--restart", restart,
+                  "continue from a checkpoint file, or 'latest': the newest in the run's "
+                  "checkpoint folder (output.checkpoint)");
 
   auto* info = app.add_subcommand("info", "print the stages, sizes, dt and memory of a scene");
   add_scene(info);
@@ -80,6 +83,7 @@ int main(int argc, char** argv) {
     if (run->parsed()) {
       if (!out_dir.empty()) ropt.out = out_dir;
       if (!backend.empty()) ropt.backend = backend;
+      if (!restart.empty()) ropt.restart = restart;
       return run_scene(scene, ropt);
     }
     if (info->parsed()) print_info(scene);

@@ -13,7 +13,9 @@
 #include "core/gpu_info.hpp"
 #include "core/progress.hpp"
 #include "integrate/backend.hpp"
+#include "integrate/restart.hpp"
 #include "integrate/stepper.hpp"
+#include "io/checkpoint_h5.hpp"
 #include "io/fields_h5.hpp"
 #include "io/fluid_h5.hpp"
 #include "io/json.hpp"
@@ -180,6 +182,30 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     fluid = make_fluid_stage(backend_name, *fluid_setup);
   }
   const std::filesystem::path dir = opt.out.value_or(scene.output.dir);
+  const CheckpointSpec& cks = scene.output.checkpoint;
+  const std::filesystem::path ckpt_dir = cks.dir.empty() ? dir / "checkpoints" : cks.dir;
+  const FluidSetup* fsetup = fluid_setup ? &*fluid_setup : nullptr;
+  // Checkpoints hold one process's state (Backend::save_state); the distributed backend's
+  // export_state/adopt hook is not wired to them yet (docs/parallel.md).
+  if (distributed && (opt.restart || (cks.enabled && scene.run.mode == RunMode::Dynamic)))
+    throw InputError(
+        "output.checkpoint and --restart are not supported on several MPI ranks yet; run the "
+        "scene on one process");
+  // A restart is checked against the scene before any output is touched.
+  std::optional<Checkpoint> restart;
+  std::filesystem::path restart_path;
+  if (opt.restart) {
+    if (scene.run.mode == RunMode::Static)
+      throw InputError("--restart: a static run (run.mode: static) has no checkpoints");
+    if (*opt.restart == "latest") {
+      restart = read_latest_checkpoint(ckpt_dir, restart_path);
+    } else {
+      restart_path = *opt.restart;
+      restart = read_checkpoint(restart_path);
+    }
+    check_checkpoint(*restart, restart_path.string(), scene, model, dt, fsetup);
+  }
+  const CheckpointOutput resume = restart ? restart->output : CheckpointOutput{-1, -1, -1, -1};
   const auto probes = resolve_probes(scene, model);
   std::vector<std::string> names;
   for (const auto& p : scene.probes) names.push_back(p.name);
@@ -188,8 +214,8 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   std::optional<ProbeWriter> probe_csv;
   std::string open_error;
   if (root) try {
-      fields.emplace(dir, model.X, model.tets, model.body);
-      probe_csv.emplace(dir, names);
+      fields.emplace(dir, model.X, model.tets, model.body, resume.field_frames);
+      probe_csv.emplace(dir, names, resume.probes_bytes);
     } catch (const InputError& e) {
       if (!distributed) throw;
       open_error = e.what();
@@ -204,11 +230,21 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   std::FILE* fluid_csv = nullptr;
   if (fluid) {
     st.attach_fluid(fluid.get());
-    fluid_out.emplace(dir);
-    fluid_csv = std::fopen((dir / "fluid.csv").c_str(), "w");
-    if (!fluid_csv) throw InputError("cannot create '" + (dir / "fluid.csv").string() + "'");
-    std::fputs("time,kinetic,px,py,pz,v_max,rho_dev,x_max,y_max,dt_limit\n", fluid_csv);
+    fluid_out.emplace(dir, resume.fluid_frames);
+    const std::string header = "time,kinetic,px,py,pz,v_max,rho_dev,x_max,y_max,dt_limit\n";
+    if (resume.fluid_csv_bytes >= 0) {
+      fluid_csv = reopen_for_append(dir / "fluid.csv", resume.fluid_csv_bytes, header);
+    } else {
+      fluid_csv = std::fopen((dir / "fluid.csv").c_str(), "w");
+      if (!fluid_csv) throw InputError("cannot create '" + (dir / "fluid.csv").string() + "'");
+      std::fputs(header.c_str(), fluid_csv);
+    }
   }
+  if (restart)
+    restore_checkpoint(*restart, restart_path.string(), scene, model, dt, *be, fluid.get(), fsetup,
+                       st);
+  std::optional<CheckpointSeries> checkpoints;
+  if (cks.enabled && scene.run.mode == RunMode::Dynamic) checkpoints.emplace(ckpt_dir, cks.keep);
 
   Json summary = Json::object();
   summary["scene"] = scene.file.string();
@@ -237,9 +273,18 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     summary["fluid"] = fj;
   }
   summary["device_bytes"] = be->device_bytes();
+  if (restart) {
+    summary["restarted_from"]["file"] = restart_path.string();
+    summary["restarted_from"]["step"] = restart->step;
+    summary["restarted_from"]["time"] = restart->time;
+  }
 
+  // The step of the last field frame and probe row (the end of the run adds them once).
+  std::int64_t last_field_step = restart ? resume.last_field_step : -1;
+  std::int64_t last_probe_step = restart ? resume.last_probe_step : -1;
   auto write_fields = [&](bool stress) {
     auto scope = timers.scope("output");
+    last_field_step = st.steps();
     const HostFields h = be->download(stress);
     if (root)
       on_root(distributed,
@@ -251,6 +296,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   };
   auto write_probes = [&] {
     auto scope = timers.scope("output");
+    last_probe_step = st.steps();
     const HostFields h = be->download(false);
     const Energies e = be->energies();
     if (root)
@@ -351,7 +397,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       finish(r.converged ? "converged" : "not_converged", r.iterations);
       return code;
     }
-    if (preload) {
+    if (preload && !restart) {
       const RelaxResult r =
           st.relax(scene.run.static_tolerance, scene.run.static_max_steps, true, relax_progress);
       progress.finish();
@@ -365,25 +411,51 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     const double probe_dt = scene.output.probes_every;
     const double field_dt = scene.output.fields_every;
     double next_probe = probe_dt, next_field = field_dt;
-    write_probes();
-    write_fields(true);
+    if (restart) {
+      next_probe = resume.next_probe;
+      next_field = resume.next_field;
+    } else {
+      write_probes();
+      write_fields(true);
+    }
+    auto last_checkpoint = std::chrono::steady_clock::now();
+    auto checkpoint = [&] {
+      auto scope = timers.scope("checkpoint");
+      Checkpoint c = capture_checkpoint(scene, model, dt, *be, fluid.get(), fsetup, st);
+      c.output = {
+          probe_csv->bytes(), fluid_csv ? static_cast<std::int64_t>(std::ftell(fluid_csv)) : -1,
+          fields->frames(),   fluid_out ? fluid_out->frames() : 0,
+          next_probe,         next_field,
+          last_probe_step,    last_field_step};
+      checkpoints->write(c);
+      last_checkpoint = std::chrono::steady_clock::now();
+    };
     const auto nsteps = static_cast<std::int64_t>(std::ceil(end / dt - 1e-9));
-    for (std::int64_t n = 1; n <= nsteps; ++n) {
+    for (std::int64_t n = st.steps() + 1; n <= nsteps; ++n) {
       st.step();
       const double t = st.time();
-      if (probe_dt > 0 ? t >= next_probe - 1e-12 * end : n % 100 == 0 || n == nsteps) {
+      // Periodic output only: the run's last row and frame follow the loop, so a checkpoint
+      // taken at a run's last step continues exactly like one taken mid-run.
+      if (probe_dt > 0 ? t >= next_probe - 1e-12 * end : n % 100 == 0) {
         write_probes();
         next_probe += probe_dt;
       }
-      if (field_dt > 0 && t >= next_field - 1e-12 * end && n != nsteps) {
+      if (field_dt > 0 && t >= next_field - 1e-12 * end) {
         write_fields(true);
         next_field += field_dt;
       }
+      if (checkpoints &&
+          ((cks.every_steps > 0 && n % cks.every_steps == 0) ||
+           (cks.every_seconds > 0 &&
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint)
+                    .count() >= cks.every_seconds)))
+        checkpoint();
       progress.update(static_cast<double>(n) / nsteps, n, fmt::format("t = {:.4g} s", t).c_str());
     }
     st.check();
     progress.finish();
-    write_fields(true);
+    if (probe_dt == 0 && last_probe_step != st.steps()) write_probes();
+    if (last_field_step != st.steps()) write_fields(true);
     finish("completed", st.steps());
   } catch (const SimulationError& e) {
     progress.finish();

@@ -37,9 +37,10 @@
 #include <string>
 #include <utility>
 
-#include "contact/contact_history.hpp"
 #include "contact/contact_record.hpp"
 #include "contact/contact_sort_host.hpp"
+#include "contact/contact_state.hpp"
+#include "core/error.hpp"
 #include "core/memory.hpp"
 #include "core/timers.hpp"
 #include "model/model.hpp"
@@ -157,9 +158,22 @@ struct ContactTopology {
 };
 static_assert(std::is_trivially_copyable_v<ContactTopology>);
 
-struct ContactStepStats {
-  std::int64_t pairs = 0, contacts = 0, active = 0;
-  double max_overlap = 0;  // max (D_DEM - d) over active contacts [m]
+// Whether this process counts a record's energy: it owns (index < n_free_vertices) the
+// record's free-body vertex with the smallest global id. Always on one process; on MPI ranks,
+// which evaluate a pair across a border on each side, exactly one rank counts it.
+struct EnergyOwner {
+  View<const std::uint64_t> vgid;
+  View<const std::int32_t> vertex_body, body_fixed;
+  std::int64_t nfv = 0;
+  QDEMSPH_HD bool operator()(const ContactRecord& r) const {
+    int best = -1;
+    for (int k = 0; k < 4; ++k) {
+      const int i = r.v[k];
+      if (i < 0 || body_fixed[vertex_body[i]]) continue;
+      if (best < 0 || vgid[i] < vgid[best]) best = i;
+    }
+    return best >= 0 && best < nfv;
+  }
 };
 
 template <class Exec>
@@ -274,12 +288,100 @@ class ContactStage {
     ++steps_;
   }
 
+  // The state between steps (contact_state.hpp): the whole history of the last force
+  // evaluation, the pair list's reference and the counters. load_state (after upload)
+  // restores them, so the next step is bit-identical; a state without a pair-list reference
+  // (e.g. migrated to another rank layout) rebuilds the list at the next step.
+  ContactState save_state() const {
+    ContactState s;
+    s.k1 = pk1_.to_host();
+    s.k2 = pk2_.to_host();
+    s.xi = pxi_.to_host();
+    s.h = ph_.to_host();
+    s.energy = pen_.to_host();
+    s.energy_t = pet_.to_host();
+    const std::vector<int> act = pact_.to_host();
+    const std::vector<ContactRecord> rec = rec_.to_host();
+    s.resize(n_prev_);  // the buffers are longer than the history
+    for (std::int64_t c = 0; c < n_prev_; ++c) {
+      s.active[c] = act[c] ? 1 : 0;
+      s.n1[c] = rec[c].n1;
+      for (int k = 0; k < 4; ++k) {
+        s.v[c][k] = rec[c].v[k];
+        s.w[c][k] = rec[c].w[k];
+      }
+    }
+    if (built_) {
+      s.ref_centroid = pc_ref_.to_host();
+      s.ref_radius = pr_ref_.to_host();
+    }
+    s.skin = skin_;
+    s.rebuilds = rebuilds_;
+    s.steps = steps_;
+    s.stats = stats_;
+    s.max_overlap_ever = max_overlap_ever_;
+    s.dissipated = dissipated_;
+    return s;
+  }
+
+  // `s`'s keys sorted and its vertices in this model's indices.
+  void load_state(const ContactState& s) {
+    const auto n = static_cast<std::int64_t>(s.size());
+    const auto nref = static_cast<std::int64_t>(s.ref_centroid.size());
+    const auto fits = [n](const auto& a) { return static_cast<std::int64_t>(a.size()) == n; };
+    if (!fits(s.k2) || !fits(s.active) || !fits(s.xi) || !fits(s.h) || !fits(s.energy) ||
+        !fits(s.energy_t) || !fits(s.v) || !fits(s.w) || !fits(s.n1) ||
+        (nref != 0 && nref != np_) || static_cast<std::int64_t>(s.ref_radius.size()) != nref)
+      throw InputError("contact state does not fit the model (history or primitive count)");
+    std::vector<ContactRecord> rec(n);
+    std::vector<int> act(n);
+    for (std::int64_t c = 0; c < n; ++c) {
+      ContactRecord& r = rec[c];
+      r.k1 = s.k1[c];
+      r.k2 = s.k2[c];
+      r.type = static_cast<std::int32_t>(s.k1[c] >> 60);
+      r.n1 = s.n1[c];
+      r.active = act[c] = s.active[c];
+      for (int k = 0; k < 4; ++k) {
+        if (s.v[c][k] >= nv_) throw InputError("contact state names a vertex the model lacks");
+        r.v[k] = static_cast<std::int32_t>(s.v[c][k]);
+        r.w[k] = s.w[c][k];
+      }
+    }
+    pk1_.assign(s.k1);
+    pk2_.assign(s.k2);
+    pxi_.assign(s.xi);
+    ph_.assign(s.h);
+    pen_.assign(s.energy);
+    pet_.assign(s.energy_t);
+    pact_.assign(act);
+    rec_.assign(rec);
+    n_prev_ = n;
+    skin_ = s.skin;
+    built_ = nref > 0;
+    if (built_) {
+      pc_ref_.assign(s.ref_centroid);
+      pr_ref_.assign(s.ref_radius);
+      build_pairs();
+    }
+    rebuilds_ = s.rebuilds;
+    steps_ = s.steps;
+    stats_ = s.stats;
+    max_overlap_ever_ = s.max_overlap_ever;
+    dissipated_ = s.dissipated;
+  }
+
   const std::map<std::string, double>& seconds() const { return timers_.seconds(); }
   // Elastic energy in the contact springs now (normal + tangential, last force evaluation).
   double stored_energy() const {
     const auto en = pen_.cview();
+    const auto rec = rec_.cview();
+    const EnergyOwner counts = energy_owner();
     return reduce_sum(
-        Exec{}, n_prev_, QDEMSPH_LAMBDA(std::int64_t c) { return en[c]; });
+        Exec{}, n_prev_, QDEMSPH_LAMBDA(std::int64_t c) { return counts(rec[c]) ? en[c] : 0.0; });
+  }
+  EnergyOwner energy_owner() const {
+    return {vgid_.cview(), vertex_body_.cview(), body_fixed_.cview(), nfv_};
   }
   // Energy dissipated by the contact dashpots and Coulomb slip since the start [J].
   double dissipated_energy() const { return dissipated_; }
@@ -322,40 +424,6 @@ class ContactStage {
     t.d_dem = d_dem_;
     t.self_contact = self_;
     return t;
-  }
-
-  // The active entries of the tangential history (after the last force evaluation), and
-  // their replacement after a re-upload (keys sorted, indices of the new model).
-  ContactHistory history() const {
-    ContactHistory h;
-    const std::vector<std::uint64_t> k1 = pk1_.to_host(), k2 = pk2_.to_host();
-    const std::vector<Vec3> xi = pxi_.to_host();
-    const std::vector<int> act = pact_.to_host();
-    const std::vector<ContactRecord> rec = rec_.to_host();
-    for (std::int64_t c = 0; c < n_prev_; ++c) {
-      if (!act[c]) continue;
-      h.k1.push_back(k1[c]);
-      h.k2.push_back(k2[c]);
-      h.xi.push_back(xi[c]);
-      h.v.push_back({rec[c].v[0], rec[c].v[1], rec[c].v[2], rec[c].v[3]});
-    }
-    return h;
-  }
-  void set_history(const ContactHistory& h) {
-    const std::int64_t n = static_cast<std::int64_t>(h.size());
-    pk1_.assign(h.k1);
-    pk2_.assign(h.k2);
-    pxi_.assign(h.xi);
-    pact_.assign(std::vector<int>(n, 1));
-    // Energy bookkeeping of the restored contacts starts afresh (trajectories are unaffected).
-    pen_.assign(std::vector<double>(n, 0.0));
-    pet_.assign(std::vector<double>(n, 0.0));
-    ph_.assign(std::vector<Vec3>(n));
-    std::vector<ContactRecord> rec(n);
-    for (std::int64_t c = 0; c < n; ++c)
-      for (int k = 0; k < 4; ++k) rec[c].v[k] = h.v[c][k];
-    rec_.assign(rec);
-    n_prev_ = n;
   }
 
   // Candidate pairs of the last broad phase (tests compare them with brute force).
@@ -415,6 +483,30 @@ class ContactStage {
           0.0);
       if (skin_ > 0 && moved <= 0.5 * skin_) return pairs_.size();
     }
+    {
+      const auto c0 = pc_ref_.view();
+      const auto r0 = pr_ref_.view();
+      for_each(
+          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) {
+            c0.set(p, cc[p]);
+            r0[p] = rr[p];
+          });
+    }
+    const double rmax = reduce_max(
+        Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return rr[p]; }, 0.0);
+    skin_ = skin_setting_ >= 0 ? skin_setting_ : d_dem_ + 0.25 * rmax;
+    built_ = true;
+    ++rebuilds_;
+    return build_pairs();
+  }
+
+  // The candidate pairs of the centroids and radii of the last rebuild (pc_ref_, pr_ref_) with
+  // gap D_DEM + skin: a function of those arrays only, so load_state rebuilds the same list.
+  std::int64_t build_pairs() {
+    const std::int64_t np = np_;
+    const auto pv = prim_v_.cview();
+    const auto cc = pc_ref_.cview();
+    const auto rr = pr_ref_.cview();
     Vec3 lo, hi;
     for (int a = 0; a < 3; ++a) {
       const double* ca = a == 0 ? cc.x : (a == 1 ? cc.y : cc.z);
@@ -425,7 +517,6 @@ class ContactStage {
     }
     const double rmax = reduce_max(
         Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) { return rr[p]; }, 0.0);
-    skin_ = skin_setting_ >= 0 ? skin_setting_ : d_dem_ + 0.25 * rmax;
     const double gap = d_dem_ + skin_;
     // Report eq. 9-10: L_cell >= D_max + D_DEM with D_max = 2 max r (+ the skin).
     const double L = (2 * rmax + gap) * (1 + 1e-9) + 1e-300;
@@ -437,17 +528,6 @@ class ContactStage {
     const auto pvv = pv;
     // Only primitives of free bodies start a pair (they come first): a fixed-fixed pair is
     // never needed, and a free-fixed pair (i < npf <= j) is found from its free side.
-    {
-      const auto c0 = pc_ref_.view();
-      const auto r0 = pr_ref_.view();
-      for_each(
-          Exec{}, np, QDEMSPH_LAMBDA(std::int64_t p) {
-            c0.set(p, cc[p]);
-            r0[p] = rr[p];
-          });
-    }
-    built_ = true;
-    ++rebuilds_;
     return pairs_.build(
         cells_, cc, rr, gap, npf_, QDEMSPH_LAMBDA(std::int64_t i, std::int64_t j)->bool {
           const int bi = pb[i], bj = pb[j];
@@ -705,10 +785,11 @@ class ContactStage {
       const auto ed = ediss_.cview();
       const auto prec = prec_.cview();
       const std::int64_t ncur = nc;
+      const EnergyOwner counts = energy_owner();
       dissipated_ += reduce_sum(
           Exec{}, nc > nprev ? nc : nprev, QDEMSPH_LAMBDA(std::int64_t i) {
-            double s = i < ncur ? ed[i] : 0.0;
-            if (i < nprev && pact[i]) {
+            double s = i < ncur && counts(rec[i]) ? ed[i] : 0.0;
+            if (i < nprev && pact[i] && counts(prec[i])) {
               std::int64_t lo = 0, hi = ncur;
               while (lo < hi) {
                 const std::int64_t mid = (lo + hi) / 2;

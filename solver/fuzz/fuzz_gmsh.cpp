@@ -1,41 +1,20 @@
-// libFuzzer target: the Gmsh .msh reader (mesh/gmsh_io.hpp: read_gmsh, which goes through
-// the gmsh library and then tet_mesh_from_gmsh).
+// libFuzzer target: the Gmsh .msh reader (mesh/gmsh_io.hpp: parse_gmsh = read_gmsh on bytes:
+// mesh/msh_reader.cpp, then tet_mesh_from_gmsh). No gmsh library is involved.
 //
-// Input: arbitrary bytes written to a private temporary .msh file that read_gmsh then reads.
-// read_gmsh must return a TetMesh (every tet positively oriented, indices in range) or throw
-// InputError; any other exception, a crash, a sanitizer report, a hang or a leak is a finding.
-// The gmsh library itself is not instrumented (Debian's libgmsh): coverage guidance sees
-// only qdemsph's code, but ASan still catches invalid accesses of our code and allocation
-// failures anywhere. One GmshSession is held for the whole process so that gmsh is
-// initialised once, not per input.
-#include <unistd.h>
-
+// Input: the bytes of a .msh file. parse_gmsh must return a TetMesh (every tet positively
+// oriented, indices in range) or throw InputError; any other exception, a crash, a sanitizer
+// report, a hang, a leak or an allocation beyond the RSS limit is a finding.
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
-#include <filesystem>
-#include <string>
+#include <string_view>
 
 #include "core/error.hpp"
 #include "mesh/gmsh_io.hpp"
 
 namespace {
-
-const std::filesystem::path& temp_path() {
-  static const std::filesystem::path p =
-      std::filesystem::temp_directory_path() /
-      ("qdemsph_fuzz_gmsh_" + std::to_string(::getpid()) + ".msh");
-  return p;
-}
-
-struct Cleanup {
-  ~Cleanup() {
-    std::error_code ec;
-    std::filesystem::remove(temp_path(), ec);
-  }
-};
 
 double volume(const qdemsph::TetMesh& m, std::size_t t) {
   const auto& v = m.tets[t];
@@ -49,16 +28,9 @@ double volume(const qdemsph::TetMesh& m, std::size_t t) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static qdemsph::GmshSession session;  // keeps gmsh initialised across inputs
-  static Cleanup cleanup;
-  {
-    std::FILE* f = std::fopen(temp_path().c_str(), "wb");
-    if (!f) std::abort();
-    if (size > 0 && std::fwrite(data, 1, size, f) != size) std::abort();
-    std::fclose(f);
-  }
   try {
-    const qdemsph::TetMesh m = qdemsph::read_gmsh(temp_path());
+    const std::string_view bytes(reinterpret_cast<const char*>(data), size);
+    const qdemsph::TetMesh m = qdemsph::parse_gmsh(bytes, "mesh file 'fuzz.msh'");
     // The contract: indices in range, every tet positively oriented.
     for (std::size_t t = 0; t < m.tets.size(); ++t) {
       for (int k = 0; k < 4; ++k)
@@ -73,7 +45,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
   } catch (const qdemsph::InputError&) {
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "fuzz_gmsh: exception other than InputError escaped read_gmsh: %s\n",
+    std::fprintf(stderr, "fuzz_gmsh: exception other than InputError escaped parse_gmsh: %s\n",
                  e.what());
     std::abort();
   }

@@ -7,10 +7,11 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "contact/contact_history.hpp"
+#include "contact/contact_state.hpp"
 #include "core/vec.hpp"
 #include "model/model.hpp"
 #include "physics/energies.hpp"
@@ -30,13 +31,17 @@ struct HostFields {
   std::vector<double> von_mises;
 };
 
-// What a run carries besides x and v, indexed like the uploaded model: dissipated energy per
-// vertex and per tet, the relaxation start state (mark_relax_start) and the contact history.
-// A distributed run keeps it across a rebuild of its decomposition; a checkpoint stores it.
+// The dynamic state between two steps, in the uploaded model's order: everything a run
+// needs to continue exactly. Vertex fields [n_vertices]: position, velocity, the force of the
+// last evaluation (the next half kick uses it), the mass-damping dissipation and the
+// relaxation start state (mark_relax_start); per-tet viscous dissipation [n_tets]; the
+// contact stage's state. A checkpoint stores it (integrate/restart.hpp); a distributed run
+// carries it across a rebuild of its decomposition (parallel/distributed_backend.cpp).
 struct BackendState {
+  std::vector<Vec3> x, v, f;
   std::vector<double> diss_v, diss_t;
-  std::vector<Vec3> x0, f0;
-  ContactHistory contact;
+  std::vector<Vec3> x0, f0;             // empty in load_state: zero
+  std::optional<ContactState> contact;  // present when the model has contact
 };
 
 class Backend {
@@ -65,6 +70,11 @@ class Backend {
   // -1, or a tet whose det F <= 0 in the last compute_forces (clears the flag).
   virtual std::int64_t take_inverted_tet() = 0;
   virtual HostFields download(bool with_stress) = 0;
+  // The state between steps (BackendState): load_state after upload (and after the
+  // Stepper's first force evaluation, which would overwrite f) restores a saved state
+  // exactly; InputError when the sizes do not fit the uploaded model.
+  virtual BackendState save_state() = 0;
+  virtual void load_state(const BackendState& state) = 0;
   virtual void sync() = 0;
   virtual std::size_t device_bytes() const = 0;
   // Wall time of sub-stages run inside compute_forces (e.g. "contact.broad"), cumulative.
@@ -78,9 +88,6 @@ class Backend {
   // contact, so that a halo exchange can overlap the tets whose vertices are all owned.
   virtual void element_forces(std::int64_t t0, std::int64_t t1, double dt_dissipation) = 0;
   virtual void assemble_forces(double dt_dissipation, double mass_damping) = 0;
-  virtual BackendState save_state() = 0;
-  // After upload() of a model of the same sizes; the contact keys sorted.
-  virtual void restore_state(const BackendState& s) = 0;
   // Halo exchange of x and v by index lists, packed where the data lives (on the GPU for
   // CUDA): pack_halo writes 6 doubles (x, v) per entry of send_index, item-major, to host
   // memory `out`; unpack_halo reads n_recv such records into vertices recv_base + k.

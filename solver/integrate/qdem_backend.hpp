@@ -344,35 +344,44 @@ class QdemBackend final : public Backend {
     return h;
   }
 
-  void sync() override { exec_sync(Exec{}); }
-
   BackendState save_state() override {
-    BackendState st;
-    st.diss_v = diss_v_.to_host();
-    st.diss_t = diss_t_.to_host();
-    st.x0 = x0_.to_host();
-    st.f0 = f0_.to_host();
-    if (contact_) st.contact = contact_->history();
-    return st;
+    BackendState s;
+    s.x = x_.to_host();
+    s.v = v_.to_host();
+    s.f = f_.to_host();
+    s.diss_v = diss_v_.to_host();
+    s.diss_t = diss_t_.to_host();
+    s.x0 = x0_.to_host();
+    s.f0 = f0_.to_host();
+    if (contact_) s.contact = contact_->save_state();
+    return s;
   }
 
-  void restore_state(const BackendState& st) override {
-    auto check = [&](std::size_t n, std::int64_t want, const char* what) {
-      if (static_cast<std::int64_t>(n) != want)
-        throw std::invalid_argument(std::string("restore_state: ") + what + " has " +
-                                    std::to_string(n) + " entries, the model " +
-                                    std::to_string(want));
+  void load_state(const BackendState& s) override {
+    const auto fits = [](const auto& a, std::int64_t n) {
+      return static_cast<std::int64_t>(a.size()) == n;
     };
-    check(st.diss_v.size(), nv_, "diss_v");
-    check(st.diss_t.size(), nt_, "diss_t");
-    check(st.x0.size(), nv_, "x0");
-    check(st.f0.size(), nv_, "f0");
-    diss_v_.assign(st.diss_v);
-    diss_t_.assign(st.diss_t);
-    x0_.assign(st.x0);
-    f0_.assign(st.f0);
-    if (contact_) contact_->set_history(st.contact);
+    const bool relax = !s.x0.empty() || !s.f0.empty();
+    if (!fits(s.x, nv_) || !fits(s.v, nv_) || !fits(s.f, nv_) || !fits(s.diss_v, nv_) ||
+        !fits(s.diss_t, nt_) || (relax && (!fits(s.x0, nv_) || !fits(s.f0, nv_))) ||
+        s.contact.has_value() != (contact_ != nullptr))
+      throw InputError("backend state does not fit the model (vertex, tet or contact counts)");
+    x_.assign(s.x);
+    v_.assign(s.v);
+    f_.assign(s.f);
+    diss_v_.assign(s.diss_v);
+    diss_t_.assign(s.diss_t);
+    if (relax) {
+      x0_.assign(s.x0);
+      f0_.assign(s.f0);
+    } else {
+      x0_.zero();
+      f0_.zero();
+    }
+    if (contact_) contact_->load_state(*s.contact);
   }
+
+  void sync() override { exec_sync(Exec{}); }
 
   void set_halo(const std::vector<std::int64_t>& send_index, std::int64_t recv_base,
                 std::int64_t n_recv) override {

@@ -39,6 +39,12 @@ class Stepper {
   RelaxResult relax(double tolerance, std::int64_t max_steps, bool preload,
                     const std::function<void(std::int64_t, double)>& progress = {});
 
+  // Restart (integrate/restart.hpp): continue from a checkpoint's time and step count.
+  void set_clock(double t, std::int64_t steps) {
+    t_ = t;
+    n_ = steps;
+  }
+
   double time() const { return t_; }
   std::int64_t steps() const { return n_; }
   double dt() const { return dt_; }

@@ -9,6 +9,7 @@
 #include <type_traits>
 
 #include "core/error.hpp"
+#include "io/h5_file.hpp"
 #include "io/json.hpp"
 
 namespace qdemsph {
@@ -17,46 +18,10 @@ namespace {
 static_assert(std::is_same_v<hid_t, int64_t>, "FieldWriter stores hid_t as int64_t");
 static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 arrays are written as (N,3) doubles");
 
-void check(herr_t status, const std::string& what) {
-  if (status < 0) throw std::runtime_error("HDF5: " + what + " failed");
-}
-
-// Closes an HDF5 handle at scope exit with the matching close function.
-struct Handle {
-  hid_t id;
-  herr_t (*close)(hid_t);
-  Handle(hid_t i, herr_t (*c)(hid_t), const std::string& what) : id(i), close(c) {
-    if (id < 0) throw std::runtime_error("HDF5: " + what + " failed");
-  }
-  ~Handle() { close(id); }
-  Handle(const Handle&) = delete;
-  Handle& operator=(const Handle&) = delete;
-};
-
-void write_dataset(hid_t parent, const char* name, hid_t type, const void* data, hsize_t rows,
-                   hsize_t cols) {
-  const hsize_t dims[2] = {rows, cols};
-  Handle space(H5Screate_simple(cols ? 2 : 1, dims, nullptr), H5Sclose, "H5Screate");
-  Handle set(H5Dcreate2(parent, name, type, space.id, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
-             H5Dclose, std::string("create dataset ") + name);
-  // An empty dataset (a mesh with no tets) has nothing to write; H5Dwrite rejects null data.
-  if (rows > 0) check(H5Dwrite(set.id, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
-}
-
-template <class T>
-void write_attribute(hid_t obj, const char* name, hid_t type, const T& value) {
-  Handle space(H5Screate(H5S_SCALAR), H5Sclose, "H5Screate");
-  Handle attr(H5Acreate2(obj, name, type, space.id, H5P_DEFAULT, H5P_DEFAULT), H5Aclose, name);
-  check(H5Awrite(attr.id, type, &value), name);
-}
-
-void write_string_attribute(hid_t obj, const char* name, const std::string& value) {
-  Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "H5Tcopy");
-  check(H5Tset_size(type.id, value.size()), "H5Tset_size");
-  Handle space(H5Screate(H5S_SCALAR), H5Sclose, "H5Screate");
-  Handle attr(H5Acreate2(obj, name, type.id, space.id, H5P_DEFAULT, H5P_DEFAULT), H5Aclose, name);
-  check(H5Awrite(attr.id, type.id, value.data()), name);
-}
+using h5::check;
+using h5::Handle;
+using h5::write_dataset;
+using h5::write_string_attribute;
 
 std::string frame_name(size_t k) { return fmt::format("{:06d}", k); }
 
@@ -64,7 +29,7 @@ std::string frame_name(size_t k) { return fmt::format("{:06d}", k); }
 
 FieldWriter::FieldWriter(const std::filesystem::path& dir, std::span<const Vec3> points,
                          std::span<const std::array<int32_t, 4>> tets,
-                         std::span<const int32_t> vertex_body)
+                         std::span<const int32_t> vertex_body, int64_t resume_frames)
     : h5_path_(dir / "fields.h5"),
       xdmf_path_(dir / "fields.xdmf"),
       reference_(points.begin(), points.end()),
@@ -74,6 +39,23 @@ FieldWriter::FieldWriter(const std::filesystem::path& dir, std::span<const Vec3>
   ensure_output_dir(dir);
   // HDF5 prints its own error stack to stderr by default; we report failures ourselves.
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  if (resume_frames >= 0) {
+    std::vector<size_t> unused;
+    file_ = h5::reopen_series(h5_path_, static_cast<size_t>(resume_frames), times_, "", unused);
+    bool fits = false;
+    try {
+      fits = file_ >= 0 && h5::rows(file_, "mesh/points") == points.size() &&
+             h5::rows(file_, "mesh/tets") == tets.size();
+    } catch (const std::runtime_error&) {
+    }
+    if (fits) {
+      write_file_atomically(xdmf_path_, xdmf());
+      return;
+    }
+    if (file_ >= 0) H5Fclose(file_);
+    times_.clear();
+    h5::set_aside(h5_path_, resume_frames);
+  }
   file_ = H5Fcreate(h5_path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   if (file_ < 0) throw InputError("cannot create '" + h5_path_.string() + "'");
 
@@ -110,8 +92,8 @@ void FieldWriter::write(double time, int64_t step, std::span<const Vec3> positio
   const std::string group = "/steps/" + frame_name(times_.size());
   Handle g(H5Gcreate2(file_, group.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose,
            "create " + group);
-  write_attribute(g.id, "time", H5T_NATIVE_DOUBLE, time);
-  write_attribute(g.id, "step", H5T_NATIVE_INT64, step);
+  h5::write_attribute<double>(g.id, "time", time);
+  h5::write_attribute<std::int64_t>(g.id, "step", step);
 
   write_dataset(g.id, "position", H5T_NATIVE_DOUBLE, positions.data(), n, 3);
   std::vector<Vec3> disp(n);

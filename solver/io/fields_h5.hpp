@@ -29,9 +29,13 @@ namespace qdemsph {
 class FieldWriter {
  public:
   // Creates DIR if needed, DIR/fields.h5 (truncating) with the /mesh group.
-  // Throws InputError when the folder is not writable.
+  // Throws InputError when the folder is not writable. With resume_frames >= 0 (a restart)
+  // the existing file is continued after its first resume_frames frames (later ones are
+  // deleted); a file that cannot be continued (damaged by a kill during a write, or of
+  // another mesh) is renamed to fields.h5.unreadable, with a warning, and a new one begun.
   FieldWriter(const std::filesystem::path& dir, std::span<const Vec3> points,
-              std::span<const std::array<int32_t, 4>> tets, std::span<const int32_t> vertex_body);
+              std::span<const std::array<int32_t, 4>> tets, std::span<const int32_t> vertex_body,
+              int64_t resume_frames = -1);
   ~FieldWriter();
   FieldWriter(const FieldWriter&) = delete;
   FieldWriter& operator=(const FieldWriter&) = delete;

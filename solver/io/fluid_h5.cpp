@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/error.hpp"
+#include "io/h5_file.hpp"
 #include "io/json.hpp"
 
 namespace qdemsph {
@@ -40,10 +41,19 @@ void write_attr(hid_t obj, const char* name, hid_t type, const T& value) {
 
 }  // namespace
 
-FluidWriter::FluidWriter(const std::filesystem::path& dir)
+FluidWriter::FluidWriter(const std::filesystem::path& dir, std::int64_t resume_frames)
     : h5_path_(dir / "fluid.h5"), xdmf_path_(dir / "fluid.xdmf") {
   ensure_output_dir(dir);
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  if (resume_frames >= 0) {
+    file_ = h5::reopen_series(h5_path_, static_cast<std::size_t>(resume_frames), times_, "position",
+                              counts_);
+    if (file_ >= 0) {
+      write_file_atomically(xdmf_path_, xdmf());
+      return;
+    }
+    h5::set_aside(h5_path_, resume_frames);
+  }
   file_ = H5Fcreate(h5_path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   if (file_ < 0) throw InputError("cannot create '" + h5_path_.string() + "'");
   const hid_t g = H5Gcreate2(file_, "steps", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);

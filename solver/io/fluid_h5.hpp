@@ -21,7 +21,9 @@ namespace qdemsph {
 
 class FluidWriter {
  public:
-  explicit FluidWriter(const std::filesystem::path& dir);
+  // resume_frames >= 0 (a restart): continue the existing file after that many frames, as
+  // FieldWriter does (io/fields_h5.hpp).
+  explicit FluidWriter(const std::filesystem::path& dir, std::int64_t resume_frames = -1);
   ~FluidWriter();
   FluidWriter(const FluidWriter&) = delete;
   FluidWriter& operator=(const FluidWriter&) = delete;
@@ -30,6 +32,7 @@ class FluidWriter {
              std::span<const double> pressure, std::span<const double> density,
              std::span<const std::uint8_t> type, std::span<const std::uint64_t> id);
   std::string xdmf() const;
+  std::int64_t frames() const { return static_cast<std::int64_t>(times_.size()); }
 
  private:
   std::filesystem::path h5_path_, xdmf_path_;

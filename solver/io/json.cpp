@@ -170,4 +170,29 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view t
                      "': " + ec.message());
 }
 
+std::FILE* reopen_for_append(const std::filesystem::path& path, std::int64_t bytes,
+                             const std::string& header) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  if (ec || static_cast<std::int64_t>(size) < bytes)
+    throw InputError(
+        "cannot continue '" + path.string() + "': " +
+        (ec ? "missing" : "shorter than at the checkpoint (" + std::to_string(bytes) + " bytes)"));
+  std::FILE* f = std::fopen(path.c_str(), "r+");
+  if (!f) throw InputError("cannot continue '" + path.string() + "': not writable");
+  std::string first(header.size(), '\0');
+  const bool same = std::fread(first.data(), 1, first.size(), f) == first.size() && first == header;
+  std::fclose(f);
+  if (!same)
+    throw InputError("cannot continue '" + path.string() +
+                     "': its columns differ from this scene's (probes changed?)");
+  fs::resize_file(path, static_cast<std::uintmax_t>(bytes), ec);
+  if (ec) throw InputError("cannot truncate '" + path.string() + "': " + ec.message());
+  f = std::fopen(path.c_str(), "a");
+  if (!f) throw InputError("cannot continue '" + path.string() + "': not writable");
+  std::fseek(f, 0, SEEK_END);  // so that ftell reports the length before the first write
+  return f;
+}
+
 }  // namespace qdemsph

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -76,5 +77,10 @@ void ensure_output_dir(const std::filesystem::path& dir);
 // Writes `text` to `path` so that a reader sees either the old or the new content, never a
 // partial file: write PATH.tmp, flush, rename over PATH. Throws InputError on failure.
 void write_file_atomically(const std::filesystem::path& path, std::string_view text);
+// Continues a text output after a restart: truncates PATH to its first `bytes` bytes (what it
+// held at the checkpoint) and opens it for appending. InputError when PATH is missing or
+// shorter, or its first line differs from `header` (the columns changed).
+std::FILE* reopen_for_append(const std::filesystem::path& path, std::int64_t bytes,
+                             const std::string& header);
 
 }  // namespace qdemsph

@@ -9,17 +9,24 @@
 
 namespace qdemsph {
 
-ProbeWriter::ProbeWriter(const std::filesystem::path& dir, std::vector<std::string> probe_names)
+ProbeWriter::ProbeWriter(const std::filesystem::path& dir, std::vector<std::string> probe_names,
+                         std::int64_t resume_bytes)
     : path_(dir / "probes.csv"), names_(std::move(probe_names)) {
   ensure_output_dir(dir);
-  file_ = std::fopen(path_.c_str(), "w");
-  if (!file_) throw InputError("cannot create '" + path_.string() + "': folder not writable");
   std::string header = "time";
   for (const auto& n : names_) header += "," + n + "_x," + n + "_y," + n + "_z";
   header += ",kinetic,strain,potential,dissipated,contact,contact_dissipated,total\n";
+  if (resume_bytes >= 0) {
+    file_ = reopen_for_append(path_, resume_bytes, header);
+    return;
+  }
+  file_ = std::fopen(path_.c_str(), "w");
+  if (!file_) throw InputError("cannot create '" + path_.string() + "': folder not writable");
   std::fputs(header.c_str(), file_);
   std::fflush(file_);
 }
+
+std::int64_t ProbeWriter::bytes() const { return std::ftell(file_); }
 
 ProbeWriter::~ProbeWriter() {
   if (file_) std::fclose(file_);

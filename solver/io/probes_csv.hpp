@@ -8,6 +8,7 @@
 // Numbers are written as %.10e.
 #pragma once
 
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <span>
@@ -21,9 +22,11 @@ namespace qdemsph {
 
 class ProbeWriter {
  public:
-  // Creates DIR (if needed) and DIR/probes.csv (truncating) and writes the header.
-  // Throws InputError when the folder is not writable.
-  ProbeWriter(const std::filesystem::path& dir, std::vector<std::string> probe_names);
+  // Creates DIR (if needed) and DIR/probes.csv (truncating) and writes the header; with
+  // resume_bytes >= 0 (a restart) continues the existing file after its first resume_bytes
+  // bytes instead. Throws InputError when the folder is not writable.
+  ProbeWriter(const std::filesystem::path& dir, std::vector<std::string> probe_names,
+              std::int64_t resume_bytes = -1);
   ~ProbeWriter();
   ProbeWriter(const ProbeWriter&) = delete;
   ProbeWriter& operator=(const ProbeWriter&) = delete;
@@ -33,6 +36,7 @@ class ProbeWriter {
 
   const std::filesystem::path& path() const { return path_; }
   long rows() const { return rows_; }
+  std::int64_t bytes() const;  // the file's length so far (for checkpoints)
 
  private:
   std::filesystem::path path_;

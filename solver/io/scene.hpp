@@ -100,10 +100,20 @@ struct RunSpec {
   int threads = 0;  // 0: OpenMP default
 };
 
+// Checkpoints of a dynamic run (io/checkpoint_h5.hpp) for `qdemsph run --restart`.
+struct CheckpointSpec {
+  bool enabled = false;
+  long every_steps = 0;       // 0: not by step count
+  double every_seconds = 0;   // wall-clock seconds between checkpoints; 0: not by time
+  int keep = 2;               // the newest `keep` files are kept
+  std::filesystem::path dir;  // empty: <output dir>/checkpoints
+};
+
 struct OutputSpec {
   std::filesystem::path dir = "out";  // relative to the working directory
   double fields_every = 0;  // simulated seconds between field snapshots; 0: first and last only
   double probes_every = 0;  // simulated seconds between probe rows; 0: every 100 steps
+  CheckpointSpec checkpoint;
 };
 
 // Weakly compressible SPH fluid (docs/scene-format.md, `fluid:`). Boxes are axis-aligned

@@ -638,12 +638,24 @@ WallSpec parse_wall(const Context& ctx, const Field& f) {
 }
 
 OutputSpec parse_output(const Context& ctx, const Field& f, const std::string& scene_name) {
-  const MapView m(ctx, f, {"dir", "fields_every", "probes_every"});
+  const MapView m(ctx, f, {"dir", "fields_every", "probes_every", "checkpoint"});
   OutputSpec o;
   o.dir = fs::path("out") / scene_name;
   if (auto v = m.opt("dir")) o.dir = v->name();
   if (auto v = m.opt("fields_every")) o.fields_every = v->number(non_negative, "must be >= 0");
   if (auto v = m.opt("probes_every")) o.probes_every = v->number(non_negative, "must be >= 0");
+  if (auto v = m.opt("checkpoint")) {
+    const MapView c(ctx, *v, {"every_steps", "every_seconds", "keep", "dir"});
+    CheckpointSpec& k = o.checkpoint;
+    k.enabled = true;
+    if (auto x = c.opt("every_steps"))
+      k.every_steps = x->integer(1, std::numeric_limits<long>::max());
+    if (auto x = c.opt("every_seconds")) k.every_seconds = x->number(positive, "must be > 0 [s]");
+    if (auto x = c.opt("keep")) k.keep = static_cast<int>(x->integer(1, 1000));
+    if (auto x = c.opt("dir")) k.dir = x->name();
+    if (k.every_steps == 0 && k.every_seconds == 0)
+      v->fail("set every_steps, every_seconds or both", false);
+  }
   return o;
 }
 

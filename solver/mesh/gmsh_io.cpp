@@ -1,11 +1,11 @@
 #include "mesh/gmsh_io.hpp"
 
-#include <gmsh.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <string>
@@ -13,35 +13,9 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "mesh/msh_precheck.hpp"
+#include "mesh/msh_reader.hpp"
 
 namespace qdemsph {
-
-// ---------------------------------------------------------------- GmshSession
-
-namespace {
-
-std::recursive_mutex g_gmsh_mutex;
-int g_gmsh_depth = 0;  // open sessions, guarded by g_gmsh_mutex
-
-}  // namespace
-
-GmshSession::GmshSession() : lock_(g_gmsh_mutex) {
-  if (g_gmsh_depth == 0) {
-    gmsh::initialize(0, nullptr, /*readConfigFiles=*/false);
-    owner_ = true;
-    gmsh::option::setNumber("General.Terminal", 0);
-    gmsh::option::setNumber("General.Verbosity", 0);
-    // 2: errors throw an exception instead of aborting (the API default; set explicitly).
-    gmsh::option::setNumber("General.AbortOnError", 2);
-  }
-  ++g_gmsh_depth;
-}
-
-GmshSession::~GmshSession() {
-  --g_gmsh_depth;
-  if (owner_) gmsh::finalize();
-}
 
 // ---------------------------------------------------------------- read_gmsh
 
@@ -54,20 +28,6 @@ std::string quoted(const std::filesystem::path& p) {
   s.append(p.string());
   s.push_back('\'');
   return s;
-}
-
-// Gmsh's last error message (non-printable bytes, e.g. from a binary file, shown as '?'), or
-// `fallback` when there is none.
-std::string gmsh_error(const std::string& fallback) {
-  std::string e;
-  try {
-    gmsh::logger::getLastError(e);
-  } catch (...) {
-  }
-  if (e.empty()) e = fallback;
-  for (char& c : e)
-    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
-  return e;
 }
 
 std::string format_g(double x) {
@@ -96,6 +56,10 @@ TetMesh tet_mesh_from_gmsh(const std::vector<std::size_t>& node_tags,
   std::vector<std::pair<std::size_t, std::size_t>> by_tag(node_tags.size());  // (tag, position)
   for (std::size_t i = 0; i < node_tags.size(); ++i) by_tag[i] = {node_tags[i], i};
   std::sort(by_tag.begin(), by_tag.end());
+  for (std::size_t i = 1; i < by_tag.size(); ++i)
+    if (by_tag[i].first == by_tag[i - 1].first)
+      throw InputError(source + ": node tag " + std::to_string(by_tag[i].first) +
+                       " is defined twice");
   auto position_of = [&](std::size_t tag, std::size_t elem) -> std::size_t {
     auto it =
         std::lower_bound(by_tag.begin(), by_tag.end(), std::pair<std::size_t, std::size_t>{tag, 0});
@@ -152,47 +116,23 @@ TetMesh tet_mesh_from_gmsh(const std::vector<std::size_t>& node_tags,
   return mesh;
 }
 
+TetMesh parse_gmsh(std::string_view bytes, const std::string& source) {
+  const MshData d = parse_msh(bytes, source);
+  return tet_mesh_from_gmsh(d.node_tags, d.coords, d.tet_tags, d.tet_nodes, source);
+}
+
 TetMesh read_gmsh(const std::filesystem::path& path) {
+  const std::string source = "mesh file " + quoted(path);
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec))
-    throw InputError("mesh file " + quoted(path) + ": no such file");
+  if (!std::filesystem::exists(path, ec)) throw InputError(source + ": no such file");
   if (!std::filesystem::is_regular_file(path, ec))
-    throw InputError("mesh file " + quoted(path) + ": not a regular file");
-  if (std::FILE* f = std::fopen(path.c_str(), "rb"))
-    std::fclose(f);
-  else
-    throw InputError("mesh file " + quoted(path) + ": cannot be opened for reading");
-  if (std::filesystem::file_size(path, ec) == 0 && !ec)
-    throw InputError("mesh file " + quoted(path) + ": empty file");
-  precheck_ascii_msh(path);  // libgmsh 4.8 crashes on some truncated files
-
-  std::vector<std::size_t> node_tags, elem_tags, elem_nodes;
-  std::vector<double> coords, param;
-  {
-    GmshSession session;
-    // Read into a model of our own and remove it afterwards: other models stay untouched.
-    auto fail = [&](const std::string& what) {
-      try {
-        gmsh::model::remove();
-      } catch (...) {
-      }
-      return InputError("mesh file " + quoted(path) +
-                        ": unreadable, truncated or corrupt (gmsh: " + gmsh_error(what) + ")");
-    };
-    try {
-      gmsh::model::add("qdemsph_read_gmsh");
-      gmsh::merge(path.string());
-      gmsh::model::mesh::getNodes(node_tags, coords, param, -1, -1, false, false);
-      gmsh::model::mesh::getElementsByType(4, elem_tags, elem_nodes);
-    } catch (const std::exception& e) {
-      throw fail(e.what());
-    } catch (...) {
-      throw fail("unknown error");
-    }
-    gmsh::model::remove();
-  }
-
-  return tet_mesh_from_gmsh(node_tags, coords, elem_tags, elem_nodes, "mesh file " + quoted(path));
+    throw InputError(source + ": not a regular file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(source + ": cannot be opened for reading");
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw InputError(source + ": read error");
+  if (bytes.empty()) throw InputError(source + ": empty file");
+  return parse_gmsh(bytes, source);
 }
 
 // ---------------------------------------------------------------- write_gmsh

@@ -12,6 +12,7 @@
 
 #include "core/error.hpp"
 #include "mesh/gmsh_io.hpp"
+#include "mesh/gmsh_session.hpp"
 
 namespace qdemsph {
 

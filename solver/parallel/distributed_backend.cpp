@@ -241,10 +241,19 @@ class DistributedImpl final : public DistributedBackend {
   }
 
   Energies energies() override {
+    // Each rank counts its home tets, owned vertices and the contacts whose smallest free
+    // vertex it owns (contact_stage.hpp, EnergyOwner): every item once over the ranks.
     const Energies e = local_->energies();
-    double a[4] = {e.kinetic, e.strain, e.potential, e.dissipated};
-    allreduce_sum_same(comm_, a, 4);
-    return {a[0], a[1], a[2], a[3]};
+    double a[6] = {e.kinetic, e.strain, e.potential, e.dissipated, e.contact, e.contact_dissipated};
+    allreduce_sum_same(comm_, a, 6);
+    Energies r;
+    r.kinetic = a[0];
+    r.strain = a[1];
+    r.potential = a[2];
+    r.dissipated = a[3];
+    r.contact = a[4];
+    r.contact_dissipated = a[5];
+    return r;
   }
 
   std::int64_t find_non_finite() override {
@@ -343,7 +352,7 @@ class DistributedImpl final : public DistributedBackend {
   }
   void assemble_forces(double, double) override { unsupported("assemble_forces"); }
   BackendState save_state() override { unsupported("save_state (use export_state)"); }
-  void restore_state(const BackendState&) override { unsupported("restore_state (use adopt)"); }
+  void load_state(const BackendState&) override { unsupported("load_state (use adopt)"); }
   void set_halo(const std::vector<std::int64_t>&, std::int64_t, std::int64_t) override {
     unsupported("set_halo");
   }
@@ -419,8 +428,10 @@ class DistributedImpl final : public DistributedBackend {
     }
     // Each history entry once: from the owner of its free vertex with the smallest id (that
     // rank holds the pair's whole neighbourhood, so its entry is the right one).
-    const ContactHistory& c = st.contact;
+    if (!st.contact) return s;
+    const ContactState& c = *st.contact;
     for (std::size_t e = 0; e < c.size(); ++e) {
+      if (!c.active[e]) continue;  // an inactive entry is never looked up
       std::array<std::int64_t, 4> kv{-1, -1, -1, -1};
       std::int64_t first = -1;
       for (int k = 0; k < 4; ++k) {
@@ -429,10 +440,10 @@ class DistributedImpl final : public DistributedBackend {
         if (owner_[kv[k]] >= 0 && (first < 0 || kv[k] < first)) first = kv[k];
       }
       if (first < 0 || owner_[first] != me_) continue;
-      s.k1.push_back(ids_.k1_to_global(c.k1[e]));
-      s.k2.push_back(ids_.k2_to_global(c.k1[e], c.k2[e]));
-      s.xi.push_back(c.xi[e]);
-      s.kv.push_back(kv);
+      s.contact.push_back(c, e);
+      s.contact.k1.back() = ids_.k1_to_global(c.k1[e]);
+      s.contact.k2.back() = ids_.k2_to_global(c.k1[e], c.k2[e]);
+      s.contact.v.back() = kv;
     }
     return s;
   }
@@ -649,26 +660,29 @@ class DistributedImpl final : public DistributedBackend {
     }
 
     // Contact history: to every new owner of one of the entry's free vertices.
-    const std::int64_t nsh = static_cast<std::int64_t>(s.k1.size());
+    const ContactState& sh = s.contact;
+    const std::int64_t nsh = static_cast<std::int64_t>(sh.size());
     std::vector<std::int64_t> hoff{0};
     std::vector<int> hranks;
     for (std::int64_t k = 0; k < nsh; ++k) {
       const std::size_t first = hranks.size();
       for (int q = 0; q < 4; ++q)
-        if (s.kv[k][q] >= 0 && owner_[s.kv[k][q]] >= 0) hranks.push_back(owner_[s.kv[k][q]]);
+        if (sh.v[k][q] >= 0 && owner_[sh.v[k][q]] >= 0) hranks.push_back(owner_[sh.v[k][q]]);
       std::sort(hranks.begin() + first, hranks.end());
       hranks.erase(std::unique(hranks.begin() + first, hranks.end()), hranks.end());
       hoff.push_back(static_cast<std::int64_t>(hranks.size()));
     }
     CommEngine he(comm_, hoff, hranks, 0);
-    StateSlice hist;
-    hist.k1.resize(he.n_recv());
-    hist.k2.resize(he.n_recv());
-    hist.xi.resize(he.n_recv());
-    hist.kv.resize(he.n_recv());
+    ContactState hist;
+    hist.resize(he.n_recv());
     {
-      const CommField a[4] = {cfield(s.k1), cfield(s.k2), cfield(s.xi), cfield(s.kv)},
-                      b[4] = {cfield(hist.k1), cfield(hist.k2), cfield(hist.xi), cfield(hist.kv)};
+      const CommField a[10] = {cfield(sh.k1), cfield(sh.k2),     cfield(sh.active),   cfield(sh.xi),
+                               cfield(sh.h),  cfield(sh.energy), cfield(sh.energy_t), cfield(sh.v),
+                               cfield(sh.w),  cfield(sh.n1)},
+                      b[10] = {cfield(hist.k1),       cfield(hist.k2), cfield(hist.active),
+                               cfield(hist.xi),       cfield(hist.h),  cfield(hist.energy),
+                               cfield(hist.energy_t), cfield(hist.v),  cfield(hist.w),
+                               cfield(hist.n1)};
       he.begin(a, CommEngine::Dir::Forward);
       he.finish(b, CommEngine::Dir::Forward);
       bytes += he.last_bytes();
@@ -698,10 +712,7 @@ class DistributedImpl final : public DistributedBackend {
       mine.tet.push_back(tg[k]);
       mine.diss_t.push_back(td[k]);
     }
-    mine.k1 = std::move(hist.k1);
-    mine.k2 = std::move(hist.k2);
-    mine.xi = std::move(hist.xi);
-    mine.kv = std::move(hist.kv);
+    mine.contact = std::move(hist);
     install(mine);
   }
 
@@ -822,8 +833,10 @@ class DistributedImpl final : public DistributedBackend {
     }
     LocalModel lm = build_local_model(g, ix_, L, x, v);
 
-    // Keep the old contact stage's counters, then replace the rank's model.
+    // Keep the old contact stage's counters and this rank's share of the contact dissipation,
+    // then replace the rank's model.
     for (const auto& [k, sec] : local_->stage_seconds()) contact_acc_[k] += sec;
+    const double contact_dissipated = rebuilds_ > 0 ? local_->energies().contact_dissipated : 0.0;
     if (contact_ && rebuilds_ > 0) {
       std::map<std::string, double> c = local_->contact_stats();
       overlap_acc_ = std::max(overlap_acc_, c["max_overlap_ever"]);
@@ -832,12 +845,17 @@ class DistributedImpl final : public DistributedBackend {
     local_->upload(lm.model);
     local_->use_preload(preload_);
     BackendState st;
+    st.x = lm.model.x;
+    st.v = lm.model.v;
+    st.f.assign(nv, Vec3{});  // the next compute_forces evaluates them
     st.diss_v.assign(nv, 0.0);
     std::copy(s.diss_v.begin(), s.diss_v.end(), st.diss_v.begin());
-    st.x0.assign(nv, Vec3{});
-    st.f0.assign(nv, Vec3{});
-    std::copy(s.x0.begin(), s.x0.end(), st.x0.begin());
-    std::copy(s.f0.begin(), s.f0.end(), st.f0.begin());
+    if (!s.x0.empty()) {
+      st.x0.assign(nv, Vec3{});
+      st.f0.assign(nv, Vec3{});
+      std::copy(s.x0.begin(), s.x0.end(), st.x0.begin());
+      std::copy(s.f0.begin(), s.f0.end(), st.f0.begin());
+    }
     st.diss_t.resize(L.tets.size());
     for (std::size_t j = 0; j < L.tets.size(); ++j) {
       const auto it = std::lower_bound(s.tet.begin(), s.tet.end(), L.tets[j]);
@@ -846,28 +864,33 @@ class DistributedImpl final : public DistributedBackend {
                                std::to_string(L.tets[j]));
       st.diss_t[j] = s.diss_t[it - s.tet.begin()];
     }
-    // Contact history in this rank's feature ids, sorted by key.
-    std::vector<std::size_t> hidx;
-    std::vector<std::pair<std::uint64_t, std::uint64_t>> lk(s.k1.size());
-    for (std::size_t e = 0; e < s.k1.size(); ++e) {
-      lk[e] = {lm.ids.k1_to_local(s.k1[e]), FeatureIds::kNone};
-      if (lk[e].first != FeatureIds::kNone) lk[e].second = lm.ids.k2_to_local(s.k1[e], s.k2[e]);
-      if (lk[e].first != FeatureIds::kNone && lk[e].second != FeatureIds::kNone) hidx.push_back(e);
+    // Contact history in this rank's feature ids and vertex indices, sorted by key (no
+    // pair-list reference: the list is built for this layout at the next step).
+    if (contact_) {
+      const ContactState& sc = s.contact;
+      std::vector<std::size_t> hidx;
+      std::vector<std::pair<std::uint64_t, std::uint64_t>> lk(sc.size());
+      for (std::size_t e = 0; e < sc.size(); ++e) {
+        lk[e] = {lm.ids.k1_to_local(sc.k1[e]), FeatureIds::kNone};
+        if (lk[e].first != FeatureIds::kNone) lk[e].second = lm.ids.k2_to_local(sc.k1[e], sc.k2[e]);
+        if (lk[e].first != FeatureIds::kNone && lk[e].second != FeatureIds::kNone)
+          hidx.push_back(e);
+      }
+      std::sort(hidx.begin(), hidx.end(), [&](auto a, auto b) { return lk[a] < lk[b]; });
+      hidx.erase(
+          std::unique(hidx.begin(), hidx.end(), [&](auto a, auto b) { return lk[a] == lk[b]; }),
+          hidx.end());
+      ContactState& c = st.contact.emplace();
+      c.dissipated = contact_dissipated;
+      for (std::size_t e : hidx) {
+        c.push_back(sc, e);
+        c.k1.back() = lk[e].first;
+        c.k2.back() = lk[e].second;
+        for (int q = 0; q < 4; ++q)
+          if (sc.v[e][q] >= 0) c.v.back()[q] = lm.ids.local_vertex(sc.v[e][q]);
+      }
     }
-    std::sort(hidx.begin(), hidx.end(), [&](auto a, auto b) { return lk[a] < lk[b]; });
-    hidx.erase(
-        std::unique(hidx.begin(), hidx.end(), [&](auto a, auto b) { return lk[a] == lk[b]; }),
-        hidx.end());
-    for (std::size_t e : hidx) {
-      st.contact.k1.push_back(lk[e].first);
-      st.contact.k2.push_back(lk[e].second);
-      st.contact.xi.push_back(s.xi[e]);
-      std::array<std::int32_t, 4> lv{-1, -1, -1, -1};
-      for (int q = 0; q < 4; ++q)
-        if (s.kv[e][q] >= 0) lv[q] = static_cast<std::int32_t>(lm.ids.local_vertex(s.kv[e][q]));
-      st.contact.v.push_back(lv);
-    }
-    local_->restore_state(st);
+    local_->load_state(st);
     local_->set_halo(halo_->engine().send_index(), L.n_owned, halo_->n_ghost());
     local_->mark_positions();
     L_ = std::move(L);

@@ -64,11 +64,10 @@ struct StateSlice {
   std::vector<Vec3> x0, f0;       // dynamic relaxation start state, or empty
   std::vector<std::int64_t> tet;  // free tets
   std::vector<double> diss_t;
-  // Contact history with global keys (vertex gid, global triangle / edge, wall index) and the
-  // gids of each entry's vertices (-1: unused).
-  std::vector<std::uint64_t> k1, k2;
-  std::vector<Vec3> xi;
-  std::vector<std::array<std::int64_t, 4>> kv;
+  // Contact history (active entries only) with global keys (vertex gid, global triangle /
+  // edge, wall index) and the gids of each entry's vertices (-1: unused); the pair-list
+  // reference and counters stay empty (the list is rebuilt for the new layout).
+  ContactState contact;
 };
 
 class DistributedBackend : public Backend {

@@ -27,6 +27,16 @@ struct FluidHost {
   std::vector<std::uint64_t> gid;
 };
 
+// The fluid state between two steps, in the stage's current (cell-sorted) order: the order
+// fixes the summation order of the next step, so a checkpoint keeps it for a bit-identical
+// restart; gid names each particle.
+struct FluidState {
+  std::vector<Vec3> x, v, a;
+  std::vector<double> rho, p, m;
+  std::vector<std::uint8_t> type;
+  std::vector<std::uint64_t> gid;
+};
+
 struct FluidStats {
   double kinetic = 0;  // sum 1/2 m v^2 over fluid [J]
   Vec3 momentum{};     // sum m v over fluid [kg m/s]
@@ -46,6 +56,10 @@ class FluidStage {
   // -1 when every fluid position/velocity/density is finite, else a global particle id.
   virtual std::int64_t find_non_finite() = 0;
   virtual FluidHost download() = 0;
+  // Checkpoint/restart: load_state restores a saved state exactly (InputError when the
+  // particle count differs).
+  virtual FluidState save_state() = 0;
+  virtual void load_state(const FluidState& state) = 0;
   virtual std::int64_t size() const = 0;
   virtual std::int64_t n_fluid() const = 0;
   virtual std::size_t device_bytes() const = 0;

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/error.hpp"
 #include "core/error_flag.hpp"
 #include "core/memory.hpp"
 #include "neighbor/cell_grid.hpp"
@@ -222,6 +223,35 @@ class SphStage final : public FluidStage {
     h.type = type_.to_host();
     h.gid = gid_.to_host();
     return h;
+  }
+
+  FluidState save_state() override {
+    FluidState s;
+    s.x = x_.to_host();
+    s.v = v_.to_host();
+    s.a = a_.to_host();
+    s.rho = rho_.to_host();
+    s.p = p_.to_host();
+    s.m = m_.to_host();
+    s.type = type_.to_host();
+    s.gid = gid_.to_host();
+    return s;
+  }
+
+  void load_state(const FluidState& s) override {
+    const auto n = static_cast<std::size_t>(n_);
+    if (s.x.size() != n || s.v.size() != n || s.a.size() != n || s.rho.size() != n ||
+        s.p.size() != n || s.m.size() != n || s.type.size() != n || s.gid.size() != n)
+      throw InputError("fluid state does not fit the scene (particle count)");
+    x_.assign(s.x);
+    v_.assign(s.v);
+    a_.assign(s.a);
+    rho_.assign(s.rho);
+    p_.assign(s.p);
+    m_.assign(s.m);
+    type_.assign(s.type);
+    gid_.assign(s.gid);
+    pending_dt_ = 0;
   }
 
   std::int64_t size() const override { return n_; }

@@ -14,6 +14,7 @@
 #include "core/error.hpp"
 #include "mesh/box.hpp"
 #include "mesh/gmsh_io.hpp"
+#include "mesh/gmsh_session.hpp"
 #include "mesh/shogi.hpp"
 #include "mesh/surface.hpp"
 

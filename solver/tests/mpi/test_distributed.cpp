@@ -226,7 +226,7 @@ TEST(Distributed, ContactTouchesAcrossRanks) {
       for (auto g : v) owner[g] = q;
     }
     const StateSlice s = dist->export_state();
-    for (const auto& kv : s.kv) {
+    for (const auto& kv : s.contact.v) {
       std::set<int> ranks;
       for (auto g : kv)
         if (g >= 0 && owner[g] >= 0) ranks.insert(owner[g]);
@@ -303,7 +303,7 @@ TEST(Distributed, RestartOnHalfTheRanks) {
     restarted.v = h.v;
     ref_be = make_host_backend();
     ref_be->upload(restarted);
-    ref_be->restore_state(st);
+    ref_be->load_state(st);
   }
   Stepper ref(restarted, *ref_be, dt);
   // Run 60 steps on all ranks, export the state (what a checkpoint writes).
