@@ -4,7 +4,7 @@
 #   make test       unit tests + the quick tier of the verification suite
 #   make verify     the verification suite (FULL=1: the long tier)
 #   make references regenerate the stored FEniCSx and YADE reference results
-#   make sanitize   unit tests under ASan+UBSan (a subset; FILTER='*' for all)
+#   make sanitize   unit tests under ASan+UBSan (all; FILTER=... for some)
 #   make fuzz       libFuzzer targets for the scene parser and mesh reader (FUZZ_SECONDS each)
 BUILD ?= build
 JOBS ?= $(shell nproc)
