@@ -102,7 +102,7 @@ def test_chain_vs_yade(qdemsph, checks, case_out):
                     note="steadiness; YADE 0.4563")
     for name, (lo, hi) in WINDOWS.items():
         yv = {}
-        for tag in ("n40", "n20_stiff4", "n20_dt2x"):
+        for tag in ("n40", "n20_stiff4", "n20_stiff16", "n20_dt2x"):
             f = yade(tag)["results"]["fall_time_s"]
             if hi < len(f):
                 yv[tag] = front_speed(f, pitch, lo, hi)
@@ -117,7 +117,7 @@ def test_chain_vs_yade(qdemsph, checks, case_out):
     checks.series("yade_shogi_chain_fall_times", "qdemsph (coarse pieces, omega0 12 rad/s)",
                   range(make_yade_chain.N), nan, style="points", **meta)
     for tag, label in (("n40", "YADE young 1e7, omega0 5"), ("n20_stiff4", "YADE 4 x young, omega0 12"),
-                       ("n20_dt2x", "YADE 2 x dt, omega0 5")):
+                       ("n20_stiff16", "YADE 16 x young, omega0 12"), ("n20_dt2x", "YADE 2 x dt, omega0 5")):
         f = [float("nan") if v is None else v for v in yade(tag)["results"]["fall_time_s"]]
         checks.series("yade_shogi_chain_fall_times", label, range(len(f)), f, style="points", **meta)
     meta = dict(title="40-piece shogi chain: tilt of every fifth piece, qdemsph", xlabel="t (s)",
