@@ -33,8 +33,13 @@ CASES = {
                                    "falling_t_tilt_45_s"]),
     # The chain variants are 20 pieces long (cost); every run's front speed is refitted over
     # the window the runs share, pieces 5..18 (derived from the stored fall times).
-    "shogi_chain": (["shogi_chain_n40", "shogi_chain_n20_stiff4", "shogi_chain_n20_dt2x"],
+    "shogi_chain": (["shogi_chain_n40", "shogi_chain_n20_stiff4", "shogi_chain_n20_dt2x",
+                     "shogi_chain_n20_stiff16"],
                     ["front_speed_pieces_5_18_m_per_s"]),
+    "shogi_one_onto_two_mu0.1": (["shogi_one_onto_two_mu0.1", "shogi_one_onto_two_mu0.1_stiff4"],
+                                 ["striker_t_tilt_45_s", "striker_t_tilt_80_s"]),
+    "shogi_one_onto_two_mu0.5": (["shogi_one_onto_two_mu0.5", "shogi_one_onto_two_mu0.5_stiff4"],
+                                 ["striker_t_tilt_45_s"]),
 }
 WINDOW = (5, 18)
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerate every YADE reference under references/yade/results/ (called by `make references`).
-# Runs one YADE process at a time, single-threaded, headless (`yade -n -x`). About 40 min of
+# Runs one YADE process at a time, single-threaded, headless (`yade -n -x`). About 55 min of
 # one core in all (more wall time on a loaded machine); the chains are most of it. YADE's
 # stderr (with the benign "do_intersect ... Unhandled switch case:0" warnings of yade
 # 2023.02a) goes to $LOGDIR.
@@ -43,9 +43,10 @@ for mu in 0.1 0.5; do
   run two30_mu${mu}_st  shogi_two.py --mu $mu --dt 5e-6 --young 4e8 --pitch 0.9375 --tag _pitch30mm_stiff4
 done
 
-# One piece onto two (edge-edge), mu 0.1 and 0.5.
+# One piece onto two (edge-edge), mu 0.1 and 0.5: base and 4x stiffness (with dt/2).
 for mu in 0.1 0.5; do
-  run one_onto_two_mu$mu shogi_one_onto_two.py --mu $mu --dt 1e-5 --young 1e8
+  run one_onto_two_mu$mu        shogi_one_onto_two.py --mu $mu --dt 1e-5 --young 1e8
+  run one_onto_two_mu${mu}_st   shogi_one_onto_two.py --mu $mu --dt 5e-6 --young 4e8 --tag _stiff4
 done
 
 # 40-piece chain (softer contact, young 1e7, to afford 95k steps x ~80 contacts), and two
@@ -55,6 +56,9 @@ done
 run chain40        shogi_chain.py --n 40 --mu 0.5 --dt 2e-5 --young 1e7
 run chain20_stiff4 shogi_chain.py --n 20 --mu 0.5 --dt 2e-5 --young 4e7 --omega0 12 --tag _stiff4
 run chain20_dt2x   shogi_chain.py --n 20 --mu 0.5 --dt 4e-5 --young 1e7 --tag _dt2x
+# 16x stiffness (young 1.6e8, dt 1e-5), the same push as the 4x run and as qdemsph's chain
+# (verification/cases/yade_shogi_chain): does the front keep slowing with stiffer contact?
+run chain20_stiff16 shogi_chain.py --n 20 --mu 0.5 --dt 1e-5 --young 1.6e8 --omega0 12 --tag _stiff16
 
 $PY convergence.py "$OUT"
 echo "logs in $LOGDIR"

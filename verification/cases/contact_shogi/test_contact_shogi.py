@@ -1,6 +1,7 @@
 """Shogi pieces (BENCHMARKS.md section 5; report Figs. 9-10): a tilted piece toppling onto
 another at mu = 0.1 and 0.5 (higher friction must be slower), one piece dropped onto two
-(edge-edge dominated) and the 40-piece chain (long tier). See README.md."""
+(edge-edge dominated). The 40-piece chain is verification/cases/yade_shogi_chain (YADE's
+arrangement). See README.md."""
 from pathlib import Path
 
 import numpy as np
@@ -52,21 +53,4 @@ def test_one_on_two_edge_impact(qdemsph, checks, case_out):
     checks.info("one_on_two.wall", run.solver_wall_s, unit="s", wall_s=run.solver_wall_s)
     checks.series("contact_shogi_one_on_two", "falling piece", p["time"], p["falling_z"], style="line",
                   title="One piece onto two: centre height", xlabel="t (s)", ylabel="z (m)")
-    checks.require()
-
-
-@pytest.mark.full
-def test_chain_of_40(qdemsph, checks, case_out):
-    run = must(qdemsph.run, HERE / "scene_chain.yaml", case_out / "run")
-    p = run.probes()
-    t = p["time"]
-    falls = [fall_time(t, p[f"p{i:02d}_z"]) for i in range(40)]
-    n_fallen = int(np.sum(np.isfinite(falls)))
-    checks.check("chain.fallen", n_fallen, kind="min", tolerance=40, unit="pieces")
-    if n_fallen >= 36:
-        pitch = 0.7 * 0.032
-        speed = (30 * pitch) / (falls[35] - falls[5])
-        checks.info("chain.front_speed", speed, unit="m/s", note="pieces 5 to 35")
-    checks.series("contact_shogi_chain", "fall time", list(range(40)), falls, style="points",
-                  title="40-piece chain: fall time of each piece", xlabel="piece", ylabel="t (s)")
     checks.require()
