@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/memory.hpp"
 #include "core/vec.hpp"
 #include "model/model.hpp"
 #include "physics/energies.hpp"
@@ -27,6 +28,15 @@ struct HostFields {
   std::vector<Vec3> x, v;
   std::vector<std::array<double, 6>> stress;  // Cauchy: xx, yy, zz, yz, xz, xy
   std::vector<double> von_mises;
+};
+
+// The solid state a fluid couples to (sph/solid_coupling.hpp), in the backend's memory space.
+// compute_forces adds fc (the fluid's force on each vertex) to f; the coupling writes fc, f and v.
+struct SolidViews {
+  Space space = Space::Host;
+  Vec3CView x;
+  Vec3View v, f, fc;
+  View<const double> inv_mass;
 };
 
 class Backend {
@@ -61,6 +71,9 @@ class Backend {
   virtual std::map<std::string, double> stage_seconds() const { return {}; }
   // The contact stage's counters of the last step (pairs, contacts, max_overlap, ...).
   virtual std::map<std::string, double> contact_stats() const { return {}; }
+  // Enables the fluid coupling force fc (zero until the fluid writes it); views stay valid
+  // until the next upload.
+  virtual SolidViews solid_views();
 };
 
 // "cpu" (OpenMP) or "cuda"; throws InputError for an unknown or unavailable backend.
