@@ -374,19 +374,20 @@ void print_info(const Scene& scene) {
   fmt::print(
       "dt         {:.4e} s (stability limit {:.4e} s{})\n", dt, model.dt_critical,
       scene.run.dt ? ", fixed by the scene" : fmt::format(", safety {}", scene.run.dt_safety));
-  if (scene.run.mode == RunMode::Dynamic)
-    fmt::print("steps      {} to t = {} s\n",
-               static_cast<std::int64_t>(std::ceil(scene.run.end_time / dt - 1e-9)),
-               scene.run.end_time);
+  double H = dt;
+  int k = 1;
   if (fluid_setup) {
-    int k = 1;
     const double dtf = fluid_dt(*fluid_setup);
-    const double H = fluid_step(model, scene, dt, dtf, k);
+    H = fluid_step(model, scene, dt, dtf, k);
     fmt::print(
         "fluid dt   {:.4e} s (CFL/force/viscous limit at the start {:.4e} s); {} solid "
         "step(s) per fluid step\n",
         H, dtf, k);
   }
+  if (scene.run.mode == RunMode::Dynamic)
+    fmt::print("steps      {} to t = {} s\n",
+               static_cast<std::int64_t>(std::ceil(scene.run.end_time / H - 1e-9)),
+               scene.run.end_time);
   fmt::print("memory     {:.1f} MiB of solver state ({:.0f} bytes per tet)\n",
              be->device_bytes() / 1048576.0,
              model.n_tets() ? static_cast<double>(be->device_bytes()) / model.n_tets() : 0.0);

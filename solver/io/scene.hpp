@@ -124,6 +124,7 @@ struct FluidSpec {
   double spacing = 0;                 // particle spacing dx [m]
   double smoothing = 1.3;             // h / dx
   bool hydrostatic_init = true;       // initial pressure rho0 g (H - depth) per block
+  double min_pressure = 0;            // tension cut-off [Pa] (<= 0): density floor rho(p_min)
   std::vector<FluidBoxSpec> blocks;   // fluid
   std::vector<FluidBoxSpec> tanks;    // open-top containers: walls around the inner box
   std::vector<FluidBoxSpec> walls;    // solid boxes of wall particles

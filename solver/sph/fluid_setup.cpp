@@ -51,7 +51,7 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
   }
   SphParams& P = f.params;
   P.kernel = WendlandC2::make(spec.smoothing * dx);
-  P.eos = TaitEos::make(rho0, c0);
+  P.eos = TaitEos::make(rho0, c0, spec.min_pressure);
   P.visc_type = spec.viscosity_type == "laminar" ? SphViscosity::Laminar : SphViscosity::Artificial;
   P.alpha = P.visc_type == SphViscosity::Artificial ? spec.viscosity : 0.0;
   P.nu = P.visc_type == SphViscosity::Laminar ? spec.viscosity : 0.0;

@@ -71,6 +71,15 @@ SolidMarkers build_solid_markers(const Model& model, double dx, double support) 
     for (int a = 0; a < 3; ++a) {
       L.n[a] = std::max(1, static_cast<int>(std::lround((hi[a] - lo[a]) / dx)));
       L.pitch[a] = (hi[a] - lo[a]) / L.n[a];
+      // One layer of markers cannot hold the fluid: its kernel misses most of the wall, the
+      // fluid beside it accelerates into the body and the pressure spikes (a 5 mm gate at
+      // dx = 5 mm was thrown open at 8 m/s).
+      if (L.n[a] < 2)
+        throw InputError(fmt::format(
+            "body '{}' is {:.4g} m thick along {}: one fluid boundary marker layer at "
+            "fluid.spacing = {:.4g} m, which does not hold the fluid back; use a spacing of at "
+            "most half the body's thickness ({:.4g} m)",
+            body.name, hi[a] - lo[a], "xyz"[a], dx, 0.5 * (hi[a] - lo[a])));
     }
     const std::int64_t np = static_cast<std::int64_t>(L.n[0]) * L.n[1] * L.n[2];
     // Embed every lattice point in the first tet that contains it (barycentric >= -tol).

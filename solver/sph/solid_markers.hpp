@@ -43,8 +43,8 @@ struct SolidMarkers {
 };
 
 // Markers of every body of the model (fixed bodies too: they are walls that do not move).
-// Throws InputError naming the body when a body gets no marker (thinner than the lattice can
-// resolve).
+// Throws InputError naming the body when its bounding box is less than two lattice layers
+// thick along an axis, or when it gets no marker.
 SolidMarkers build_solid_markers(const Model& model, double dx, double support);
 
 // Contact cell width of the model's surface (report eq. 9-10 as contact/contact_stage.hpp

@@ -135,10 +135,11 @@ class SphStage final : public FluidStage {
           });
           drho[i] = dr;
         });
-    // Equation of state (fluid).
+    // Equation of state (fluid), density floored at the tension cut-off (sph_eos.hpp).
     for_each(
         Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) {
-          rho[i] += ddt * drho[i];
+          const double r = rho[i] + ddt * drho[i];
+          rho[i] = r > P.eos.rho_min ? r : P.eos.rho_min;
           p[i] = P.eos.pressure(rho[i]);
         });
     // Wall and marker pressure and density by extrapolation from the fluid (Adami; a marker's
@@ -176,13 +177,14 @@ class SphStage final : public FluidStage {
             const Vec3 xj = x[j];
             if (j == i || norm2(si.x - xj) >= s2) return;
             const PairState sj{xj, v[j], rho[j], p[j], m[j]};
-            f += sph_pair_force(P, si, sj, j < nf || wall_visc);
+            f +=
+                j < nf ? sph_pair_force(P, si, sj, true) : sph_boundary_force(P, si, sj, wall_visc);
           });
           a.set(i, P.gravity + f / si.m);
         });
     if (coupling_) {
-      // The fluid's force on each marker: the same pair forces with the roles swapped, which
-      // are their exact negatives (sph_pair.hpp), so the coupling conserves momentum.
+      // The fluid's force on each marker: the exact negative of each pair force the marker
+      // exerts on the fluid (sph_pair.hpp), so the coupling conserves momentum.
       const auto F = coupling_->force();
       const std::uint64_t g0 = coupling_->gid0();
       for_each(
@@ -195,7 +197,7 @@ class SphStage final : public FluidStage {
               const Vec3 xj = x[j];
               if (norm2(si.x - xj) >= s2) return;
               const PairState sj{xj, v[j], rho[j], p[j], m[j]};
-              f += sph_pair_force(P, si, sj, wall_visc);
+              f -= sph_boundary_force(P, sj, si, wall_visc);
             });
             F.set(static_cast<std::int64_t>(gid[i] - g0), f);
           });
