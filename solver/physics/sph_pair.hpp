@@ -96,26 +96,23 @@ QDEMSPH_HD Vec3 sph_boundary_force(const SphParams& P, const PairState& f, const
   return sph_pair_force_with(P, f, w, s, viscous);
 }
 
-// Continuity contribution to drho_i/dt from j (m_j v_ij . grad W).
-QDEMSPH_HD double sph_continuity(const SphParams& P, const PairState& a, const PairState& b) {
-  const Vec3 r = a.x - b.x;
-  const double F = P.kernel.f(norm2(r));
-  return b.m * F * dot(a.v - b.v, r);
-}
-
-// delta-SPH diffusion contribution to drho_i/dt from fluid particle j.
-QDEMSPH_HD double sph_density_diffusion(const SphParams& P, const PairState& a,
-                                        const PairState& b) {
+// drho_i/dt contribution from j: continuity m_j v_ij . grad_i W_ij, plus the delta-SPH diffusion
+// term when j is a fluid particle (`diffuse`). One kernel evaluation for both.
+QDEMSPH_HD double sph_density_rate(const SphParams& P, const PairState& a, const PairState& b,
+                                   bool diffuse) {
   const Vec3 r = a.x - b.x;
   const double r2 = norm2(r);
   const double F = P.kernel.f(r2);
-  if (F == 0.0 || P.delta == 0.0) return 0.0;
-  const double c0 = P.eos.c0;
-  const double drho_h = P.eos.rho0 * dot(P.gravity, b.x - a.x) / (c0 * c0);
-  const double eta2 = 0.01 * P.kernel.h * P.kernel.h;
-  // (x_j - x_i) . grad_i W = -r^2 F >= 0
-  return P.delta * P.kernel.h * c0 * (b.m / b.rho) * 2.0 * (b.rho - a.rho - drho_h) * (-r2 * F) /
+  double d = b.m * F * dot(a.v - b.v, r);
+  if (diffuse && P.delta != 0.0) {
+    const double c0 = P.eos.c0;
+    const double drho_h = P.eos.rho0 * dot(P.gravity, b.x - a.x) / (c0 * c0);
+    const double eta2 = 0.01 * P.kernel.h * P.kernel.h;
+    // (x_j - x_i) . grad_i W = -r^2 F >= 0
+    d += P.delta * P.kernel.h * c0 * (b.m / b.rho) * 2.0 * (b.rho - a.rho - drho_h) * (-r2 * F) /
          (r2 + eta2);
+  }
+  return d;
 }
 
 }  // namespace qdemsph

@@ -32,18 +32,23 @@ QDEMSPH_HD int sph_group(std::uint8_t type) {
   return type == kSphFluid ? kGroupFluid : (type == kSphSolid ? kGroupMarker : kGroupWall);
 }
 
+// Cells are half the kernel support wide: the 5 x 5 x 5 cells around a particle cover the
+// support sphere with 42 % fewer candidates than 3 x 3 x 3 cells of one support width.
+inline constexpr int kSphCellsPerSupport = 2;
+
 // Neighbour ranges over arrays sorted by (group, cell): the particles of group q in cell c are
 // [start[q nc + c], start[q nc + c + 1]), nc the number of cells. Calls f(j) for every particle
-// of the groups [g0, g1) in the 27 cells around p.
+// of the groups [g0, g1) in the (2R + 1)^3 cells around p, R = kSphCellsPerSupport.
 template <class F>
 QDEMSPH_HD void sph_for_each_near(const CellGrid& g, const std::int64_t* start, int g0, int g1,
                                   Vec3 p, F&& f) {
+  constexpr int R = kSphCellsPerSupport;
   const std::int64_t nc = std::int64_t(g.n[0]) * g.n[1] * g.n[2];
   const int cx = g.coord(p.x, 0), cy = g.coord(p.y, 1), cz = g.coord(p.z, 2);
-  const int x0 = cx > 0 ? cx - 1 : 0, x1 = cx + 1 < g.n[0] ? cx + 1 : g.n[0] - 1;
-  for (int z = cz - 1; z <= cz + 1; ++z) {
+  const int x0 = cx > R ? cx - R : 0, x1 = cx + R < g.n[0] ? cx + R : g.n[0] - 1;
+  for (int z = cz - R; z <= cz + R; ++z) {
     if (z < 0 || z >= g.n[2]) continue;
-    for (int y = cy - 1; y <= cy + 1; ++y) {
+    for (int y = cy - R; y <= cy + R; ++y) {
       if (y < 0 || y >= g.n[1]) continue;
       const std::int64_t row = g.key(0, y, z);
       for (int q = g0; q < g1; ++q) {
@@ -75,7 +80,7 @@ class SphStage final : public FluidStage {
     m_.assign(f.m);
     type_.assign(f.type);
     gid_.assign(f.gid);
-    grid_ = CellGrid::cover(f.lo, f.hi, P_.kernel.support());
+    grid_ = CellGrid::cover(f.lo, f.hi, P_.kernel.support() / kSphCellsPerSupport);
     start_.resize(kSphGroups * grid_.count() + 1);
     if (nm_ > 0) {
       if (!solid) throw InputError("the fluid has body markers but no body state to couple to");
@@ -130,8 +135,7 @@ class SphStage final : public FluidStage {
             const Vec3 xj = x[j];
             if (j == i || norm2(si.x - xj) >= s2) return;  // most candidates: no further loads
             const PairState sj{xj, v[j], rho[j], 0.0, m[j]};
-            dr += sph_continuity(P, si, sj);
-            if (j < nf) dr += sph_density_diffusion(P, si, sj);
+            dr += sph_density_rate(P, si, sj, j < nf);
           });
           drho[i] = dr;
         });
