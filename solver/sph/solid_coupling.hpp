@@ -4,9 +4,14 @@
 //
 // place(): x_m = sum_c w_c x_{v_c} from the body's vertices; the marker's velocity is its
 //   displacement over the fluid step, v_m = (x_m^{n+1} - x_m^n) / H (the body's mean velocity
-//   over the step, the same half-step velocity the fluid's continuity equation uses), its
-//   acceleration a_m = (v_m^{n+1/2} - v_m^{n-1/2}) / H enters the Adami pressure (moving wall).
-//   With H = 0 (the first evaluation) v_m interpolates the vertex velocities and a_m = 0.
+//   over the step, the same half-step velocity the fluid's continuity equation uses). With H = 0
+//   (the first evaluation) v_m interpolates the vertex velocities.
+//   The Adami pressure of a marker uses gravity but not the body's acceleration: with a light
+//   body (the elastic gate: water's added mass ~6 x its own) the acceleration term feeds the
+//   body's response back into the wall pressure within one fluid step and the coupling blows
+//   up (3.5 x the hydrostatic force after 5 ms); without it the fluid's reaction reaches the
+//   body through the continuity equation and the force falls to m / (m + m_added) of the
+//   hydrostatic one at the release, as added-mass theory says.
 // apply(): the fluid's force on each marker F_m (the exact negative of the marker's pair forces
 //   on the fluid, sph_stage.hpp) is gathered to the vertices, F_v = sum_m w_mv F_m, in a fixed
 //   order (vertex -> marker CSR, no atomics), and handed to the body as its coupling force fc.
@@ -64,8 +69,8 @@ class SolidCoupling {
   Vec3View force() { return force_.view(); }
 
   // Markers are the stage's particles [b, e) (sorted order; marker index = gid - gid0).
-  void place(Vec3View x, Vec3View v, Vec3View a, View<const std::uint64_t> gid, std::int64_t b,
-             std::int64_t e, double H) {
+  void place(Vec3View x, Vec3View v, View<const std::uint64_t> gid, std::int64_t b, std::int64_t e,
+             double H) {
     const std::int64_t nm = nm_;
     const std::uint64_t g0 = gid0_;
     const auto tv = tv_.cview();
@@ -83,14 +88,7 @@ class SolidCoupling {
             xn += wc * xs[vi];
             vn += wc * vs[vi];
           }
-          if (H > 0) {
-            const Vec3 vh = (xn - x[i]) / H;
-            a.set(i, (vh - v[i]) / H);
-            v.set(i, vh);
-          } else {
-            a.set(i, Vec3{});
-            v.set(i, vn);
-          }
+          v.set(i, H > 0 ? (xn - x[i]) / H : vn);
           x.set(i, xn);
         });
   }

@@ -6,7 +6,7 @@
 // the particles of one group in one cell are contiguous and memory access is local):
 //   x, v, a (Vec3 buffers), rho, p, drho, m (double), type (uint8), gid (uint64).
 // Wall particles are fixed; markers move with the bodies (sph/solid_coupling.hpp); the p and rho
-// of both come from the fluid by Adami extrapolation, and a marker's a is its acceleration.
+// of both come from the fluid by Adami extrapolation.
 //
 // Per pair evaluation (fluid-fluid): ~150 flops, reads 2 x 9 doubles; per particle and step
 // ~3 passes over ~75 neighbours (Wendland C2 at h = 1.3 dx, support 2h).
@@ -109,8 +109,7 @@ class SphStage final : public FluidStage {
     // The fluid step since the last compute: the density update's dt and the markers' H.
     const double ddt = pending_dt_;
     pending_dt_ = 0;
-    if (coupling_)
-      coupling_->place(x_.view(), v_.view(), a_.view(), gid_.cview(), nf_, nf_ + nm_, ddt);
+    if (coupling_) coupling_->place(x_.view(), v_.view(), gid_.cview(), nf_, nf_ + nm_, ddt);
     sort();
     const SphParams P = P_;
     const CellGrid g = grid_;
@@ -146,11 +145,10 @@ class SphStage final : public FluidStage {
           rho[i] = r > P.eos.rho_min ? r : P.eos.rho_min;
           p[i] = P.eos.pressure(rho[i]);
         });
-    // Wall and marker pressure and density by extrapolation from the fluid (Adami; a marker's
-    // acceleration is that of the body, a fixed wall's zero). Mass rho V with the particle's
-    // volume: dx^3 for walls, the body lattice cell for markers.
+    // Wall and marker pressure and density by extrapolation from the fluid (Adami, with gravity
+    // only: solid_coupling.hpp says why a body's acceleration is left out). Mass rho V with the
+    // particle's volume: dx^3 for walls, the body lattice cell for markers.
     {
-      const auto a = a_.cview();
       const double wall_volume = wall_volume_;
       const std::uint64_t g0 = coupling_ ? coupling_->gid0() : 0;
       const auto mvol = coupling_ ? coupling_->volume() : View<const double>{};
@@ -163,7 +161,7 @@ class SphStage final : public FluidStage {
             sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, xi, [&](std::int64_t j) {
               adami_add(s, P.kernel, xi, x[j], p[j], rho[j]);
             });
-            const double pw = adami_pressure(s, P.gravity, a[i]);
+            const double pw = adami_pressure(s, P.gravity, Vec3{});
             p[i] = pw;
             rho[i] = P.eos.density(pw);
             m[i] = rho[i] * (q < nm ? mvol[gid[i] - g0] : wall_volume);
