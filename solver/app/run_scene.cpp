@@ -136,6 +136,19 @@ void on_root(bool distributed, F&& write) {
   write();
 }
 
+// The fluid step H and the solid sub-steps k (H = k x the solid's dt): a fixed run.dt is
+// shared (k = 1); otherwise as many solid steps as fit in the fluid's limit (at most
+// fluid.solid_substeps).
+double fluid_step(const Model& model, const Scene& scene, double dt_solid, double dt_fluid,
+                  int& substeps) {
+  substeps = 1;
+  if (scene.run.dt) return *scene.run.dt;
+  if (model.dt_critical_tet < 0 || dt_solid >= dt_fluid) return dt_fluid;
+  substeps = std::max(1, static_cast<int>(std::floor(dt_fluid / dt_solid)));
+  if (scene.fluid.solid_substeps) substeps = std::min(substeps, *scene.fluid.solid_substeps);
+  return substeps * dt_solid;
+}
+
 }  // namespace
 
 int run_scene(const Scene& scene, const RunOptions& opt) {
@@ -170,16 +183,20 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   double dt = choose_dt(model, scene.run.dt, scene.run.dt_safety);
   std::optional<FluidSetup> fluid_setup;
   std::unique_ptr<FluidStage> fluid;
+  int solid_substeps = 1;
   if (scene.fluid.present) {
     fluid_setup = build_fluid(scene.fluid, scene.gravity);
+    if (scene.fluid.couple_bodies) add_solid_markers(*fluid_setup, model);
     const double dtf = fluid_dt(*fluid_setup);
     if (scene.run.dt && *scene.run.dt > dtf)
       throw InputError(
           fmt::format("run.dt = {:.4e} s exceeds the fluid's time-step limit {:.4e} s "
                       "(CFL with c0 = {:.4g} m/s)",
                       *scene.run.dt, dtf, fluid_setup->params.eos.c0));
-    if (!scene.run.dt) dt = model.dt_critical_tet >= 0 ? std::min(dt, dtf) : dtf;
-    fluid = make_fluid_stage(backend_name, *fluid_setup);
+    dt = fluid_step(model, scene, dt, dtf, solid_substeps);
+    SolidViews solid;
+    if (fluid_setup->n_marker > 0) solid = be->solid_views();
+    fluid = make_fluid_stage(backend_name, *fluid_setup, fluid_setup->n_marker ? &solid : nullptr);
   }
   const std::filesystem::path dir = opt.out.value_or(scene.output.dir);
   const CheckpointSpec& cks = scene.output.checkpoint;
@@ -229,9 +246,10 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   std::optional<FluidWriter> fluid_out;
   std::FILE* fluid_csv = nullptr;
   if (fluid) {
-    st.attach_fluid(fluid.get());
+    st.attach_fluid(fluid.get(), solid_substeps);
     fluid_out.emplace(dir, resume.fluid_frames);
-    const std::string header = "time,kinetic,px,py,pz,v_max,rho_dev,x_max,y_max,dt_limit\n";
+    const std::string header =
+        "time,kinetic,px,py,pz,v_max,rho_dev,x_max,y_max,dt_limit,fbx,fby,fbz\n";
     if (resume.fluid_csv_bytes >= 0) {
       fluid_csv = reopen_for_append(dir / "fluid.csv", resume.fluid_csv_bytes, header);
     } else {
@@ -268,7 +286,9 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     fj["h"] = P.kernel.h;
     fj["c0"] = P.eos.c0;
     fj["rho0"] = P.eos.rho0;
+    fj["n_marker"] = fluid->n_marker();
     fj["dt_limit"] = fluid_dt(*fluid_setup);
+    fj["solid_substeps"] = solid_substeps;
     fj["device_bytes"] = fluid->device_bytes();
     summary["fluid"] = fj;
   }
@@ -308,10 +328,13 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       double xm = -1e300, ym = -1e300;
       for (std::size_t i = 0; i < fh.x.size(); ++i)
         if (fh.type[i] == kSphFluid) xm = std::max(xm, fh.x[i].x), ym = std::max(ym, fh.x[i].y);
-      fmt::print(fluid_csv,
-                 "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.6g}\n",
-                 st.time(), fs.kinetic, fs.momentum.x, fs.momentum.y, fs.momentum.z, fs.v_max,
-                 fs.rho_dev, xm, ym, fluid->dt_limits().min());
+      fmt::print(
+          fluid_csv,
+          "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.6g},{:.9g},{:.9g},"
+          "{:.9g}\n",
+          st.time(), fs.kinetic, fs.momentum.x, fs.momentum.y, fs.momentum.z, fs.v_max, fs.rho_dev,
+          xm, ym, fluid->dt_limits().min(), fs.force_on_bodies.x, fs.force_on_bodies.y,
+          fs.force_on_bodies.z);
       std::fflush(fluid_csv);
     }
   };
@@ -402,6 +425,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
           st.relax(scene.run.static_tolerance, scene.run.static_max_steps, true, relax_progress);
       progress.finish();
       summary["preload"] = relax_json(r);
+      if (fluid) fluid->compute();  // the markers follow the bodies to the preloaded state
       if (!r.converged)
         throw SimulationError(fmt::format(
             "initial static solve (preload) did not converge: residual {:.3e} after {} steps",
@@ -483,7 +507,10 @@ void print_info(const Scene& scene) {
   fmt::print("scene      {}\n", scene.file.string());
   fmt::print("mode       {}\n", scene.run.mode == RunMode::Static ? "static" : "dynamic");
   std::optional<FluidSetup> fluid_setup;
-  if (scene.fluid.present) fluid_setup = build_fluid(scene.fluid, scene.gravity);
+  if (scene.fluid.present) {
+    fluid_setup = build_fluid(scene.fluid, scene.gravity);
+    if (scene.fluid.couple_bodies) add_solid_markers(*fluid_setup, model);
+  }
   fmt::print("stages     {}\n", stages_of(model, fluid_setup ? &*fluid_setup : nullptr));
   fmt::print("bodies     {}\n", model.bodies.size());
   for (const auto& b : model.bodies)
@@ -494,13 +521,20 @@ void print_info(const Scene& scene) {
   fmt::print(
       "dt         {:.4e} s (stability limit {:.4e} s{})\n", dt, model.dt_critical,
       scene.run.dt ? ", fixed by the scene" : fmt::format(", safety {}", scene.run.dt_safety));
+  double H = dt;
+  int k = 1;
+  if (fluid_setup) {
+    const double dtf = fluid_dt(*fluid_setup);
+    H = fluid_step(model, scene, dt, dtf, k);
+    fmt::print(
+        "fluid dt   {:.4e} s (CFL/force/viscous limit at the start {:.4e} s); {} solid "
+        "step(s) per fluid step\n",
+        H, dtf, k);
+  }
   if (scene.run.mode == RunMode::Dynamic)
     fmt::print("steps      {} to t = {} s\n",
-               static_cast<std::int64_t>(std::ceil(scene.run.end_time / dt - 1e-9)),
+               static_cast<std::int64_t>(std::ceil(scene.run.end_time / H - 1e-9)),
                scene.run.end_time);
-  if (fluid_setup)
-    fmt::print("fluid dt   {:.4e} s (CFL/force/viscous limit at the start)\n",
-               fluid_dt(*fluid_setup));
   fmt::print("memory     {:.1f} MiB of solver state ({:.0f} bytes per tet)\n",
              be->device_bytes() / 1048576.0,
              model.n_tets() ? static_cast<double>(be->device_bytes()) / model.n_tets() : 0.0);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "contact/contact_state.hpp"
+#include "core/memory.hpp"
 #include "core/vec.hpp"
 #include "model/model.hpp"
 #include "physics/energies.hpp"
@@ -42,6 +43,15 @@ struct BackendState {
   std::vector<double> diss_v, diss_t;
   std::vector<Vec3> x0, f0;             // empty in load_state: zero
   std::optional<ContactState> contact;  // present when the model has contact
+};
+
+// The solid state a fluid couples to (sph/solid_coupling.hpp), in the backend's memory space.
+// compute_forces adds fc (the fluid's force on each vertex) to f; the coupling writes fc, f and v.
+struct SolidViews {
+  Space space = Space::Host;
+  Vec3CView x;
+  Vec3View v, f, fc;
+  View<const double> inv_mass;
 };
 
 class Backend {
@@ -100,6 +110,9 @@ class Backend {
   // first mark, so a run that never marks pays nothing.
   virtual void mark_positions() = 0;
   virtual double max_moved() = 0;
+  // Enables the fluid coupling force fc (zero until the fluid writes it); views stay valid
+  // until the next upload.
+  virtual SolidViews solid_views();
 };
 
 // "cpu" (OpenMP) or "cuda"; throws InputError for an unknown or unavailable backend.

@@ -4,6 +4,10 @@
 
 namespace qdemsph {
 
+SolidViews Backend::solid_views() {
+  throw InputError("backend '" + name() + "' cannot couple bodies to a fluid");
+}
+
 std::unique_ptr<Backend> make_host_backend() {
   return std::make_unique<QdemBackend<HostExec>>("cpu");
 }

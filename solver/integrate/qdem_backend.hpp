@@ -41,6 +41,7 @@ class QdemBackend final : public Backend {
     x_.assign(m.x);
     v_.assign(m.v);
     f_.resize(nv_);
+    fc_.resize(0);
     fext_.assign(m.fext);
     fpre_.assign(m.fpre);
     mass_.assign(m.mass);
@@ -139,9 +140,12 @@ class QdemBackend final : public Backend {
     const auto f = f_.view();
     const auto diss_v = diss_v_.view();
     const Vec3 g = gravity_;
+    const bool coupled = fc_.size() > 0;
+    const auto fc = fc_.cview();
     for_each(
         Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
           Vec3 s = fext[i] + mass[i] * g;
+          if (coupled) s += fc[i];
           for (std::int64_t j = off[i]; j < off[i + 1]; ++j) s += tf[ent[j]];
           if (alpha > 0) {
             const Vec3 vi = v[i];
@@ -170,6 +174,18 @@ class QdemBackend final : public Backend {
             {"max_overlap_ever", contact_->max_overlap_ever()},
             {"pair_rebuilds", static_cast<double>(contact_->pair_rebuilds())},
             {"fill_mismatches", static_cast<double>(contact_->fill_mismatches())}};
+  }
+
+  SolidViews solid_views() override {
+    if (fc_.size() != nv_) fc_.resize(nv_);
+    SolidViews s;
+    s.space = S;
+    s.x = x_.cview();
+    s.v = v_.view();
+    s.f = f_.view();
+    s.fc = fc_.view();
+    s.inv_mass = inv_mass_.cview();
+    return s;
   }
 
   void kick(double h) override {
@@ -446,7 +462,7 @@ class QdemBackend final : public Backend {
     return X_.bytes() + x_.bytes() + v_.bytes() + f_.bytes() + fext_.bytes() + fpre_.bytes() +
            mass_.bytes() + inv_mass_.bytes() + relax_inv_mass_.bytes() + diss_v_.bytes() +
            tv_.bytes() + dxi_.bytes() + vol0_.bytes() + tmat_.bytes() + tf_.bytes() +
-           diss_t_.bytes() + csr_off_.bytes() + csr_ent_.bytes() +
+           diss_t_.bytes() + csr_off_.bytes() + csr_ent_.bytes() + fc_.bytes() +
            (contact_ ? contact_->bytes() : 0);
   }
 
@@ -456,6 +472,7 @@ class QdemBackend final : public Backend {
   Vec3 gravity_;
   bool preload_ = false;
   Vec3Buffer X_{S}, x_{S}, v_{S}, f_{S}, fext_{S}, fpre_{S}, x0_{S}, f0_{S};
+  Vec3Buffer fc_{S};  // fluid force on the vertices (empty unless coupled: solid_views)
   Buffer<Vec3> tf_{S};
   Buffer<double> mass_{S}, inv_mass_{S}, relax_inv_mass_{S}, diss_v_{S}, dxi_{S}, vol0_{S},
       diss_t_{S};

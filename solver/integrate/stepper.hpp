@@ -4,6 +4,7 @@
 // a SimulationError naming the element, its body and the time.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 
@@ -26,8 +27,12 @@ class Stepper {
   // dt is used as given; callers check it against model.dt_critical (see choose_dt).
   Stepper(const Model& model, Backend& backend, double dt, int check_every = 10);
 
-  // The SPH fluid advanced with the solids at the same dt (phase timer "sph"); null: none.
-  void attach_fluid(FluidStage* fluid) { fluid_ = fluid; }
+  // The SPH fluid (phase timer "sph"; null: none). Each step() is then one fluid step of dt
+  // in which the solids take `solid_substeps` steps of dt / solid_substeps (fluid_stage.hpp).
+  void attach_fluid(FluidStage* fluid, int solid_substeps = 1) {
+    fluid_ = fluid;
+    substeps_ = std::max(1, solid_substeps);
+  }
 
   // Velocity Verlet: v += dt/2 f/m; x += dt v; f = f(x, v); v += dt/2 f/m (solids and fluid).
   void step();
@@ -56,6 +61,7 @@ class Stepper {
   double dt_;
   int check_every_;
   FluidStage* fluid_ = nullptr;
+  int substeps_ = 1;
   double t_ = 0;
   std::int64_t n_ = 0;
   mutable PhaseTimers timers_;

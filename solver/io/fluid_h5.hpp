@@ -3,7 +3,7 @@
 // DIR/fluid.h5:
 //   /steps/<k:06d>/   attributes time (double), step (int64)
 //       position (N,3), velocity (N,3), pressure (N), density (N)   doubles
-//       type (N) int32: 0 fluid, 1 wall;  id (N) int64: global particle id
+//       type (N) int32: 0 fluid, 1 wall, 2 body marker;  id (N) int64: global particle id
 // Particles are stored in the solver's (cell-sorted) order of that frame: use `id` to follow a
 // particle across frames. DIR/fluid.xdmf lists the frames written so far (rewritten
 // atomically after each frame, the .h5 flushed first).

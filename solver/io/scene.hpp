@@ -129,14 +129,17 @@ struct FluidSpec {
   std::optional<double> sound_speed;          // c0 [m/s]; absent: auto = 10 sqrt(2 |g| H)
   std::string viscosity_type = "artificial";  // artificial (alpha) or laminar (nu [m^2/s])
   double viscosity = 0.01;
-  bool wall_viscosity = true;        // viscosity also between fluid and walls
-  double delta = 0.1;                // delta-SPH density diffusion coefficient
-  double spacing = 0;                // particle spacing dx [m]
-  double smoothing = 1.3;            // h / dx
-  bool hydrostatic_init = true;      // initial pressure rho0 g (H - depth) per block
-  std::vector<FluidBoxSpec> blocks;  // fluid
-  std::vector<FluidBoxSpec> tanks;   // open-top containers: walls around the inner box
-  std::vector<FluidBoxSpec> walls;   // solid boxes of wall particles
+  bool wall_viscosity = true;         // viscosity also between fluid and walls
+  double delta = 0.1;                 // delta-SPH density diffusion coefficient
+  double spacing = 0;                 // particle spacing dx [m]
+  double smoothing = 1.3;             // h / dx
+  bool hydrostatic_init = true;       // initial pressure rho0 g (H - depth) per block
+  double min_pressure = 0;            // tension cut-off [Pa] (<= 0): density floor rho(p_min)
+  std::vector<FluidBoxSpec> blocks;   // fluid
+  std::vector<FluidBoxSpec> tanks;    // open-top containers: walls around the inner box
+  std::vector<FluidBoxSpec> walls;    // solid boxes of wall particles
+  bool couple_bodies = true;          // the bodies are walls for the fluid and feel its forces
+  std::optional<int> solid_substeps;  // solid steps per fluid step; absent: as many as fit
 };
 
 // Contact between bodies (docs/scene-format.md, `contact:`). Per material pair values

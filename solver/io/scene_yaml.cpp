@@ -557,10 +557,10 @@ FluidBoxSpec parse_fluid_box(const Context& ctx, const Field& f, bool tank) {
 }
 
 FluidSpec parse_fluid(const Context& ctx, const Field& f) {
-  const MapView m(
-      ctx, f,
-      {"density", "sound_speed", "viscosity", "viscosity_type", "wall_viscosity", "delta",
-       "spacing", "smoothing", "hydrostatic_init", "blocks", "tanks", "walls"});
+  const MapView m(ctx, f,
+                  {"density", "sound_speed", "viscosity", "viscosity_type", "wall_viscosity",
+                   "delta", "spacing", "smoothing", "hydrostatic_init", "blocks", "tanks", "walls",
+                   "couple_bodies", "solid_substeps", "min_pressure"});
   FluidSpec fl;
   fl.present = true;
   if (auto v = m.opt("density")) fl.density = v->number(positive, "must be > 0");
@@ -585,6 +585,10 @@ FluidSpec parse_fluid(const Context& ctx, const Field& f) {
     for (const auto& bf : v->list()) fl.tanks.push_back(parse_fluid_box(ctx, bf, true));
   if (auto v = m.opt("walls"))
     for (const auto& bf : v->list()) fl.walls.push_back(parse_fluid_box(ctx, bf, false));
+  if (auto v = m.opt("min_pressure"))
+    fl.min_pressure = v->number([](double x) { return x <= 0; }, "must be <= 0 [Pa]");
+  if (auto v = m.opt("couple_bodies")) fl.couple_bodies = v->boolean();
+  if (auto v = m.opt("solid_substeps")) fl.solid_substeps = static_cast<int>(v->integer(1, 100000));
   return fl;
 }
 

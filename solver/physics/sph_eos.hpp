@@ -6,6 +6,12 @@
 //
 // c0 is stated by the scene (fluid.sound_speed) or chosen as 10 sqrt(2 g H), which keeps the
 // Mach number below 0.1 and the density variation below ~1 % (Monaghan 1994).
+//
+// Tension cut-off p_min <= 0 (fluid.min_pressure, default 0): the fluid's density is kept at or
+// above rho_min = rho(p_min), so p >= p_min. Without it a particle that splashes away from a
+// wall or from the bulk loses density through the continuity equation with nothing to restore
+// it (the dam break's far-wall jet reached rho < 0.4 rho0 and then a negative density), and the
+// tension pulls it into walls. Momentum conservation is unaffected (a per-particle state).
 #pragma once
 
 #include <cmath>
@@ -18,16 +24,18 @@ struct TaitEos {
   double rho0 = 1000;  // reference density [kg/m^3]
   double c0 = 10;      // reference sound speed [m/s]
   double B = 0;        // c0^2 rho0 / gamma [Pa]
-  double p_min = 0;    // floor on pressure (tension cut-off, <= 0); -inf: none
+  double p_min = 0;    // tension cut-off [Pa] (<= 0; -1e300: none)
+  double rho_min = 0;  // density(p_min): the floor of the fluid's density
 
   static constexpr double gamma = 7.0;
 
-  static TaitEos make(double rho0, double c0) {
+  static TaitEos make(double rho0, double c0, double p_min = 0.0) {
     TaitEos e;
     e.rho0 = rho0;
     e.c0 = c0;
     e.B = c0 * c0 * rho0 / gamma;
-    e.p_min = -1e300;
+    e.p_min = p_min;
+    e.rho_min = e.density(p_min);
     return e;
   }
   QDEMSPH_HD double pressure(double rho) const {

@@ -6,8 +6,9 @@
 
 namespace qdemsph {
 
-std::unique_ptr<FluidStage> make_fluid_stage_cuda(const FluidSetup& setup) {
-  return std::make_unique<SphStage<CudaExec>>(setup);
+std::unique_ptr<FluidStage> make_fluid_stage_cuda(const FluidSetup& setup,
+                                                  const SolidViews* solid) {
+  return std::make_unique<SphStage<CudaExec>>(setup, solid);
 }
 
 }  // namespace qdemsph

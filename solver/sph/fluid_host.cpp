@@ -5,13 +5,15 @@
 namespace qdemsph {
 
 #ifdef QDEMSPH_HAVE_CUDA
-std::unique_ptr<FluidStage> make_fluid_stage_cuda(const FluidSetup& setup);  // fluid_cuda.cu
+std::unique_ptr<FluidStage> make_fluid_stage_cuda(const FluidSetup& setup,
+                                                  const SolidViews* solid);  // fluid_cuda.cu
 #endif
 
-std::unique_ptr<FluidStage> make_fluid_stage(const std::string& backend, const FluidSetup& setup) {
-  if (backend == "cpu") return std::make_unique<SphStage<HostExec>>(setup);
+std::unique_ptr<FluidStage> make_fluid_stage(const std::string& backend, const FluidSetup& setup,
+                                             const SolidViews* solid) {
+  if (backend == "cpu") return std::make_unique<SphStage<HostExec>>(setup, solid);
 #ifdef QDEMSPH_HAVE_CUDA
-  if (backend == "cuda") return make_fluid_stage_cuda(setup);
+  if (backend == "cuda") return make_fluid_stage_cuda(setup, solid);
 #endif
   throw InputError("the SPH fluid stage has no '" + backend + "' backend in this build");
 }

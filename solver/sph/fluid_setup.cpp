@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "model/model.hpp"
 
 namespace qdemsph {
 namespace {
@@ -50,7 +51,7 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
   }
   SphParams& P = f.params;
   P.kernel = WendlandC2::make(spec.smoothing * dx);
-  P.eos = TaitEos::make(rho0, c0);
+  P.eos = TaitEos::make(rho0, c0, spec.min_pressure);
   P.visc_type = spec.viscosity_type == "laminar" ? SphViscosity::Laminar : SphViscosity::Artificial;
   P.alpha = P.visc_type == SphViscosity::Artificial ? spec.viscosity : 0.0;
   P.nu = P.visc_type == SphViscosity::Laminar ? spec.viscosity : 0.0;
@@ -140,10 +141,34 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
   return f;
 }
 
+void add_solid_markers(FluidSetup& f, const Model& model) {
+  if (model.bodies.empty()) return;
+  const double support = f.params.kernel.support();
+  check_kernel_within_contact_cell(model, support, f.dx, f.params.kernel.h / f.dx);
+  f.markers = build_solid_markers(model, f.dx, support);
+  f.n_marker = f.markers.size();
+  for (std::int64_t k = 0; k < f.n_marker; ++k) {
+    const Vec3 x = f.markers.x[k];
+    f.x.push_back(x);
+    f.v.push_back(Vec3{});
+    f.p.push_back(0.0);
+    f.rho.push_back(f.params.eos.rho0);
+    f.m.push_back(f.params.eos.rho0 * f.markers.volume[k]);
+    f.type.push_back(kSphSolid);
+    f.gid.push_back(f.gid.size());
+    for (int a = 0; a < 3; ++a) {
+      f.lo[a] = std::min(f.lo[a], x[a] - 2.0 * support);
+      f.hi[a] = std::max(f.hi[a], x[a] + 2.0 * support);
+    }
+  }
+}
+
 std::string describe_fluid(const FluidSetup& f) {
   return fmt::format(
-      "SPH ({} fluid + {} wall particles, dx = {:.4g} m, h = {:.4g} m, c0 = {:.4g} m/s)", f.n_fluid,
-      f.n_wall, f.dx, f.params.kernel.h, f.params.eos.c0);
+      "SPH ({} fluid + {} wall particles{}, dx = {:.4g} m, h = {:.4g} m, c0 = {:.4g} m/s)",
+      f.n_fluid, f.n_wall,
+      f.n_marker ? fmt::format(", coupled to the bodies by {} markers", f.n_marker) : "", f.dx,
+      f.params.kernel.h, f.params.eos.c0);
 }
 
 }  // namespace qdemsph

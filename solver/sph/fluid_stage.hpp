@@ -1,12 +1,15 @@
 // The fluid stage seen by the stepper (host orchestration; one virtual call per stage, never
 // inside a loop). Implemented by SphStage<Exec> (sph_stage.hpp) for each execution space.
 //
-// Time integration matches the solid's velocity Verlet at the shared dt:
-//   kick(dt/2): v += dt/2 a                      (fluid)
-//   drift(dt):  x += dt v                        (fluid)
-//   compute():  sort by cell; drho(x_{n+1}, v_{n+1/2}); rho += dt drho; EOS; wall pressure
-//               (Adami); pair forces -> a
-//   kick(dt/2)
+// Time integration: velocity Verlet at the fluid step H, the bodies taking k >= 1 steps of
+// H / k inside it (integrate/stepper.cpp):
+//   kick(H/2): v += H/2 a                        (fluid)
+//   drift(H):  x += H v                          (fluid)
+//   ... the bodies advance to t + H ...
+//   compute(): place the body markers; sort by cell; drho(x_{n+1}, v_{n+1/2});
+//              rho += H drho; EOS; wall and marker pressure (Adami); pair forces -> a;
+//              fluid forces on the bodies (sph/solid_coupling.hpp)
+//   kick(H/2)
 #pragma once
 
 #include <cstdint>
@@ -15,6 +18,7 @@
 #include <vector>
 
 #include "core/vec.hpp"
+#include "integrate/backend.hpp"
 #include "physics/sph_timestep.hpp"
 #include "sph/fluid_setup.hpp"
 
@@ -38,11 +42,12 @@ struct FluidState {
 };
 
 struct FluidStats {
-  double kinetic = 0;  // sum 1/2 m v^2 over fluid [J]
-  Vec3 momentum{};     // sum m v over fluid [kg m/s]
-  double v_max = 0;    // max |v| [m/s]
-  double a_max = 0;    // max |a| [m/s^2]
-  double rho_dev = 0;  // max |rho / rho0 - 1| over fluid
+  double kinetic = 0;      // sum 1/2 m v^2 over fluid [J]
+  Vec3 momentum{};         // sum m v over fluid [kg m/s]
+  double v_max = 0;        // max |v| [m/s]
+  double a_max = 0;        // max |a| [m/s^2]
+  double rho_dev = 0;      // max |rho / rho0 - 1| over fluid
+  Vec3 force_on_bodies{};  // the fluid's total force on the coupled bodies [N]
 };
 
 class FluidStage {
@@ -62,11 +67,14 @@ class FluidStage {
   virtual void load_state(const FluidState& state) = 0;
   virtual std::int64_t size() const = 0;
   virtual std::int64_t n_fluid() const = 0;
+  virtual std::int64_t n_marker() const = 0;  // boundary markers of coupled bodies
   virtual std::size_t device_bytes() const = 0;
   virtual const SphParams& params() const = 0;
 };
 
-// "cpu" or "cuda" (the latter where a CUDA build provides it; else InputError).
-std::unique_ptr<FluidStage> make_fluid_stage(const std::string& backend, const FluidSetup& setup);
+// "cpu" or "cuda" (the latter where a CUDA build provides it; else InputError). `solid`: the
+// bodies' state (Backend::solid_views) when the setup has body markers, else null.
+std::unique_ptr<FluidStage> make_fluid_stage(const std::string& backend, const FluidSetup& setup,
+                                             const SolidViews* solid = nullptr);
 
 }  // namespace qdemsph

@@ -1,10 +1,12 @@
 // WCSPH fluid stage written once over an execution space (HostExec, CudaExec).
 //
-// Data (SoA, n = fluid + wall particles, kept sorted by (cell, type): re-sorted at every
-// compute() by a counting sort, so neighbour ranges are contiguous, memory access is local and
-// the wall-pressure pass visits fluid particles only):
-//   x, v, a (Vec3 buffers), rho, p, drho, m (double), type (uint8: fluid / wall), gid (uint64).
-// Wall particles are fixed; their p and rho come from the fluid by Adami extrapolation.
+// Data (SoA, n = fluid + marker + wall particles, kept sorted by (group, cell) with the groups
+// fluid | body markers | walls: re-sorted at every compute() by a counting sort, so each group
+// is one contiguous range (fluid loops run over [0, nf) only, evenly split between threads),
+// the particles of one group in one cell are contiguous and memory access is local):
+//   x, v, a (Vec3 buffers), rho, p, drho, m (double), type (uint8), gid (uint64).
+// Wall particles are fixed; markers move with the bodies (sph/solid_coupling.hpp); the p and rho
+// of both come from the fluid by Adami extrapolation.
 //
 // Per pair evaluation (fluid-fluid): ~150 flops, reads 2 x 9 doubles; per particle and step
 // ~3 passes over ~75 neighbours (Wendland C2 at h = 1.3 dx, support 2h).
@@ -12,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "core/error.hpp"
 #include "core/error_flag.hpp"
@@ -20,27 +23,38 @@
 #include "physics/sph_boundary.hpp"
 #include "physics/sph_pair.hpp"
 #include "sph/fluid_stage.hpp"
+#include "sph/solid_coupling.hpp"
 
 namespace qdemsph {
 
-// Neighbour ranges over arrays sorted by (cell, type): the particles of cell c are
-// [start[2c], start[2c+2]), its fluid particles [start[2c], start[2c+1]). Calls f(j) for every
-// particle (fluid_only: every fluid particle) in the 27 cells around p.
+// Particle groups in sorted order.
+enum SphGroup : int { kGroupFluid = 0, kGroupMarker = 1, kGroupWall = 2, kSphGroups = 3 };
+QDEMSPH_HD int sph_group(std::uint8_t type) {
+  return type == kSphFluid ? kGroupFluid : (type == kSphSolid ? kGroupMarker : kGroupWall);
+}
+
+// Cells are half the kernel support wide: the 5 x 5 x 5 cells around a particle cover the
+// support sphere with 42 % fewer candidates than 3 x 3 x 3 cells of one support width.
+inline constexpr int kSphCellsPerSupport = 2;
+
+// Neighbour ranges over arrays sorted by (group, cell): the particles of group q in cell c are
+// [start[q nc + c], start[q nc + c + 1]), nc the number of cells. Calls f(j) for every particle
+// of the groups [g0, g1) in the (2R + 1)^3 cells around p, R = kSphCellsPerSupport.
 template <class F>
-QDEMSPH_HD void sph_for_each_near(const CellGrid& g, const std::int64_t* start, Vec3 p,
-                                  bool fluid_only, F&& f) {
+QDEMSPH_HD void sph_for_each_near(const CellGrid& g, const std::int64_t* start, int g0, int g1,
+                                  Vec3 p, F&& f) {
+  constexpr int R = kSphCellsPerSupport;
+  const std::int64_t nc = std::int64_t(g.n[0]) * g.n[1] * g.n[2];
   const int cx = g.coord(p.x, 0), cy = g.coord(p.y, 1), cz = g.coord(p.z, 2);
-  const int x0 = cx > 0 ? cx - 1 : 0, x1 = cx + 1 < g.n[0] ? cx + 1 : g.n[0] - 1;
-  for (int z = cz - 1; z <= cz + 1; ++z) {
+  const int x0 = cx > R ? cx - R : 0, x1 = cx + R < g.n[0] ? cx + R : g.n[0] - 1;
+  for (int z = cz - R; z <= cz + R; ++z) {
     if (z < 0 || z >= g.n[2]) continue;
-    for (int y = cy - 1; y <= cy + 1; ++y) {
+    for (int y = cy - R; y <= cy + R; ++y) {
       if (y < 0 || y >= g.n[1]) continue;
       const std::int64_t row = g.key(0, y, z);
-      if (fluid_only) {
-        for (std::int64_t c = row + x0; c <= row + x1; ++c)
-          for (std::int64_t j = start[2 * c]; j < start[2 * c + 1]; ++j) f(j);
-      } else {
-        for (std::int64_t j = start[2 * (row + x0)]; j < start[2 * (row + x1 + 1)]; ++j) f(j);
+      for (int q = g0; q < g1; ++q) {
+        const std::int64_t* s = start + q * nc + row;
+        for (std::int64_t j = s[x0]; j < s[x1 + 1]; ++j) f(j);
       }
     }
   }
@@ -51,8 +65,13 @@ class SphStage final : public FluidStage {
   static constexpr Space S = Exec::space;
 
  public:
-  explicit SphStage(const FluidSetup& f)
-      : P_(f.params), n_(f.size()), nf_(f.n_fluid), wall_volume_(f.dx * f.dx * f.dx) {
+  // `solid`: the bodies' state when the setup has markers (else unused, may be null).
+  explicit SphStage(const FluidSetup& f, const SolidViews* solid = nullptr)
+      : P_(f.params),
+        n_(f.size()),
+        nf_(f.n_fluid),
+        nm_(f.n_marker),
+        wall_volume_(f.dx * f.dx * f.dx) {
     x_.assign(f.x);
     v_.assign(f.v);
     a_.resize(n_);
@@ -62,135 +81,153 @@ class SphStage final : public FluidStage {
     m_.assign(f.m);
     type_.assign(f.type);
     gid_.assign(f.gid);
-    grid_ = CellGrid::cover(f.lo, f.hi, P_.kernel.support());
-    start_.resize(2 * grid_.count() + 1);
+    grid_ = CellGrid::cover(f.lo, f.hi, P_.kernel.support() / kSphCellsPerSupport);
+    start_.resize(kSphGroups * grid_.count() + 1);
+    if (nm_ > 0) {
+      if (!solid) throw InputError("the fluid has body markers but no body state to couple to");
+      coupling_ = std::make_unique<SolidCoupling<Exec>>(f.markers, f.n_fluid + f.n_wall, *solid);
+    }
+    sort();  // groups contiguous before the first compute places the markers
     compute();
   }
 
   void kick(double h) override {
     const auto a = a_.cview();
-    const auto type = type_.cview();
     const auto v = v_.view();
     for_each(
-        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-          if (type[i] == kSphFluid) v.set(i, v[i] + h * a[i]);
-        });
+        Exec{}, nf_, QDEMSPH_LAMBDA(std::int64_t i) { v.set(i, v[i] + h * a[i]); });
   }
 
   void drift(double h) override {
     const auto v = v_.cview();
-    const auto type = type_.cview();
     const auto x = x_.view();
     for_each(
-        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-          if (type[i] == kSphFluid) x.set(i, x[i] + h * v[i]);
-        });
+        Exec{}, nf_, QDEMSPH_LAMBDA(std::int64_t i) { x.set(i, x[i] + h * v[i]); });
     pending_dt_ += h;
   }
 
   void compute() override {
+    // The fluid step since the last compute: the density update's dt and the markers' H.
+    const double ddt = pending_dt_;
+    pending_dt_ = 0;
+    if (coupling_) coupling_->place(x_.view(), v_.view(), gid_.cview(), nf_, nf_ + nm_, ddt);
     sort();
     const SphParams P = P_;
     const CellGrid g = grid_;
     const std::int64_t* start = start_.cview().p;
+    const std::int64_t nf = nf_;
     const auto x = x_.cview(), v = v_.cview();
     const auto type = type_.cview();
+    const auto gid = gid_.cview();
     const auto m = m_.view();
-    const double wall_volume = wall_volume_;
     const auto rho = rho_.view();
     const auto p = p_.view();
     const auto drho = drho_.view();
     // Density rate at the drifted positions and half-step velocities (continuity + delta-SPH),
     // then rho_{n+1} = rho_n + dt drho: the pressure is taken at the same time as the positions
     // (a density lagging half a step behind the positions makes the acoustic modes grow).
-    const double ddt = pending_dt_;
-    pending_dt_ = 0;
     for_each(
-        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-          if (type[i] != kSphFluid) {
-            drho[i] = 0.0;
-            return;
-          }
+        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) {
           const PairState si{x[i], v[i], rho[i], 0.0, m[i]};
           double dr = 0;
           const double s2 = P.kernel.support2;
-          sph_for_each_near(g, start, si.x, false, [&](std::int64_t j) {
+          sph_for_each_near(g, start, kGroupFluid, kSphGroups, si.x, [&](std::int64_t j) {
             const Vec3 xj = x[j];
             if (j == i || norm2(si.x - xj) >= s2) return;  // most candidates: no further loads
             const PairState sj{xj, v[j], rho[j], 0.0, m[j]};
-            dr += sph_continuity(P, si, sj);
-            if (type[j] == kSphFluid) dr += sph_density_diffusion(P, si, sj);
+            dr += sph_density_rate(P, si, sj, j < nf);
           });
           drho[i] = dr;
         });
-    // Equation of state (fluid). Walls keep the density Adami gives them below.
+    // Equation of state (fluid), density floored at the tension cut-off (sph_eos.hpp).
     for_each(
-        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-          if (type[i] != kSphFluid) return;
-          rho[i] += ddt * drho[i];
+        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) {
+          const double r = rho[i] + ddt * drho[i];
+          rho[i] = r > P.eos.rho_min ? r : P.eos.rho_min;
           p[i] = P.eos.pressure(rho[i]);
         });
-    // Wall pressure and density by extrapolation from the fluid (fixed walls: a_w = 0).
-    for_each(
-        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-          if (type[i] == kSphFluid) return;
-          const Vec3 xi = x[i];
-          AdamiSum s;
-          sph_for_each_near(g, start, xi, true, [&](std::int64_t j) {
-            adami_add(s, P.kernel, xi, x[j], p[j], rho[j]);
+    // Wall and marker pressure and density by extrapolation from the fluid (Adami, with gravity
+    // only: solid_coupling.hpp says why a body's acceleration is left out). Mass rho V with the
+    // particle's volume: dx^3 for walls, the body lattice cell for markers.
+    {
+      const double wall_volume = wall_volume_;
+      const std::uint64_t g0 = coupling_ ? coupling_->gid0() : 0;
+      const auto mvol = coupling_ ? coupling_->volume() : View<const double>{};
+      const std::int64_t nm = nm_;
+      for_each(
+          Exec{}, n_ - nf, QDEMSPH_LAMBDA(std::int64_t q) {
+            const std::int64_t i = nf + q;
+            const Vec3 xi = x[i];
+            AdamiSum s;
+            sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, xi, [&](std::int64_t j) {
+              adami_add(s, P.kernel, xi, x[j], p[j], rho[j]);
+            });
+            const double pw = adami_pressure(s, P.gravity, Vec3{});
+            p[i] = pw;
+            rho[i] = P.eos.density(pw);
+            m[i] = rho[i] * (q < nm ? mvol[gid[i] - g0] : wall_volume);
           });
-          const double pw = adami_pressure(s, P.gravity, Vec3{});
-          p[i] = pw;
-          rho[i] = P.eos.density(pw);
-          m[i] = rho[i] * wall_volume;  // a wall particle keeps its volume dx^3
-        });
+    }
     // Pair sums: acceleration of fluid particles.
     const auto a = a_.view();
+    const bool wall_visc = P.wall_viscosity;
     for_each(
-        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-          if (type[i] != kSphFluid) {
-            a.set(i, Vec3{});
-            return;
-          }
+        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) {
           const PairState si{x[i], v[i], rho[i], p[i], m[i]};
           Vec3 f{};
           const double s2 = P.kernel.support2;
-          sph_for_each_near(g, start, si.x, false, [&](std::int64_t j) {
+          sph_for_each_near(g, start, kGroupFluid, kSphGroups, si.x, [&](std::int64_t j) {
             const Vec3 xj = x[j];
             if (j == i || norm2(si.x - xj) >= s2) return;
             const PairState sj{xj, v[j], rho[j], p[j], m[j]};
-            f += sph_pair_force(P, si, sj, type[j] == kSphFluid || P.wall_viscosity);
+            f +=
+                j < nf ? sph_pair_force(P, si, sj, true) : sph_boundary_force(P, si, sj, wall_visc);
           });
           a.set(i, P.gravity + f / si.m);
         });
+    if (coupling_) {
+      // The fluid's force on each marker: the exact negative of each pair force the marker
+      // exerts on the fluid (sph_pair.hpp), so the coupling conserves momentum.
+      const auto F = coupling_->force();
+      const std::uint64_t g0 = coupling_->gid0();
+      for_each(
+          Exec{}, nm_, QDEMSPH_LAMBDA(std::int64_t q) {
+            const std::int64_t i = nf + q;
+            const PairState si{x[i], v[i], rho[i], p[i], m[i]};
+            Vec3 f{};
+            const double s2 = P.kernel.support2;
+            sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, si.x, [&](std::int64_t j) {
+              const Vec3 xj = x[j];
+              if (norm2(si.x - xj) >= s2) return;
+              const PairState sj{xj, v[j], rho[j], p[j], m[j]};
+              f -= sph_boundary_force(P, sj, si, wall_visc);
+            });
+            F.set(static_cast<std::int64_t>(gid[i] - g0), f);
+          });
+      coupling_->apply(ddt);
+    }
   }
 
   FluidStats stats() override {
     const auto v = v_.cview(), a = a_.cview();
     const auto m = m_.cview(), rho = rho_.cview();
-    const auto type = type_.cview();
     const double rho0 = P_.eos.rho0;
+    const std::int64_t nf = nf_;
     FluidStats s;
     s.kinetic = reduce_sum(
-        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-          return type[i] == kSphFluid ? 0.5 * m[i] * norm2(v[i]) : 0.0;
-        });
-    for (int c = 0; c < 3; ++c)
+        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) { return 0.5 * m[i] * norm2(v[i]); });
+    for (int c = 0; c < 3; ++c) {
+      const double* vc = c == 0 ? v.x : (c == 1 ? v.y : v.z);
       s.momentum[c] = reduce_sum(
-          Exec{}, n_,
-          QDEMSPH_LAMBDA(std::int64_t i) { return type[i] == kSphFluid ? m[i] * v[i][c] : 0.0; });
+          Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) { return m[i] * vc[i]; });
+    }
     s.v_max = reduce_max(
-        Exec{}, n_,
-        QDEMSPH_LAMBDA(std::int64_t i) { return type[i] == kSphFluid ? norm(v[i]) : 0.0; }, 0.0);
+        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) { return norm(v[i]); }, 0.0);
     s.a_max = reduce_max(
-        Exec{}, n_,
-        QDEMSPH_LAMBDA(std::int64_t i) { return type[i] == kSphFluid ? norm(a[i]) : 0.0; }, 0.0);
+        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) { return norm(a[i]); }, 0.0);
     s.rho_dev = reduce_max(
-        Exec{}, n_,
-        QDEMSPH_LAMBDA(std::int64_t i) {
-          return type[i] == kSphFluid ? fabs(rho[i] / rho0 - 1.0) : 0.0;
-        },
-        0.0);
+        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) { return fabs(rho[i] / rho0 - 1.0); }, 0.0);
+    if (coupling_) s.force_on_bodies = coupling_->total_force();
     return s;
   }
 
@@ -256,29 +293,30 @@ class SphStage final : public FluidStage {
 
   std::int64_t size() const override { return n_; }
   std::int64_t n_fluid() const override { return nf_; }
+  std::int64_t n_marker() const override { return nm_; }
   const SphParams& params() const override { return P_; }
   std::size_t device_bytes() const override {
     return x_.bytes() + v_.bytes() + a_.bytes() + rho_.bytes() + p_.bytes() + drho_.bytes() +
            m_.bytes() + type_.bytes() + gid_.bytes() + tmp3_.bytes() + tmpd_.bytes() +
            tmpu_.bytes() + tmpt_.bytes() + keys_.bytes() + start_.bytes() + order_.bytes() +
-           scratch_.bytes();
+           scratch_.bytes() + (coupling_ ? coupling_->bytes() : 0);
   }
 
   // Public only because nvcc's extended lambdas need an accessible enclosing function.
-  // Stable sort by (cell, type) (sort_by_key, neighbor/cell_grid.hpp), then every per-particle
-  // array gathered into the new order.
+  // Stable sort by (group, cell) (sort_by_key, neighbor/cell_grid.hpp), then every
+  // per-particle array gathered into the new order.
   void sort() {
     if (keys_.size() != n_) keys_.resize(n_);
     const auto k = keys_.view();
     const auto x = x_.cview();
     const auto type = type_.cview();
     const CellGrid g = grid_;
+    const std::int64_t nc = grid_.count();
     for_each(
-        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-          k[i] = 2 * g.key_of(x[i]) + (type[i] == kSphFluid ? 0 : 1);
-        });
+        Exec{}, n_,
+        QDEMSPH_LAMBDA(std::int64_t i) { k[i] = sph_group(type[i]) * nc + g.key_of(x[i]); });
     if (order_.size() != n_) order_.resize(n_);
-    sort_by_key(Exec{}, keys_.cview(), 2 * grid_.count(), start_.view(), order_.view(), scratch_);
+    sort_by_key(Exec{}, keys_.cview(), kSphGroups * nc, start_.view(), order_.view(), scratch_);
     const auto ord = order_.cview();
     permute3(x_, ord);
     permute3(v_, ord);
@@ -310,16 +348,16 @@ class SphStage final : public FluidStage {
 
  private:
   SphParams P_;
-  std::int64_t n_ = 0, nf_ = 0;
-  double pending_dt_ = 0;
-  double wall_volume_ =
-      0;  // dx^3  // time drifted since the last compute(): the density update's dt
+  std::int64_t n_ = 0, nf_ = 0, nm_ = 0;
+  double pending_dt_ = 0;   // time drifted since the last compute(): the density update's dt
+  double wall_volume_ = 0;  // dx^3
   Vec3Buffer x_{S}, v_{S}, a_{S}, tmp3_{S};
   Buffer<double> rho_{S}, p_{S}, drho_{S}, m_{S}, tmpd_{S};
   Buffer<std::uint8_t> type_{S}, tmpt_{S};
   Buffer<std::uint64_t> gid_{S}, tmpu_{S};
   CellGrid grid_;
   Buffer<std::int64_t> keys_{S}, start_{S}, order_{S}, scratch_{S};
+  std::unique_ptr<SolidCoupling<Exec>> coupling_;  // null without bodies
 };
 
 }  // namespace qdemsph

@@ -59,8 +59,12 @@ TEST(SphKernel, GradientMatchesFiniteDifferences) {
 }
 
 TEST(SphEos, TaitPressureInverseAndSoundSpeed) {
-  const TaitEos e = TaitEos::make(1000, 20);
+  const TaitEos e = TaitEos::make(1000, 20, -1e300);  // no tension cut-off
   EXPECT_EQ(e.pressure(1000), 0.0);
+  const TaitEos cut = TaitEos::make(1000, 20);  // default cut-off p >= 0: density floor rho0
+  EXPECT_EQ(cut.rho_min, 1000.0);
+  EXPECT_EQ(cut.pressure(990), 0.0);
+  EXPECT_NEAR(TaitEos::make(1000, 20, -500).rho_min, e.density(-500), 1e-12);
   EXPECT_NEAR(e.B, 20.0 * 20.0 * 1000 / 7, 1e-9);
   for (double rho : {990.0, 1000.0, 1003.0, 1010.0}) {
     EXPECT_NEAR(e.density(e.pressure(rho)), rho, 1e-9);
@@ -122,7 +126,7 @@ TEST(SphSetup, HydrostaticColumnPressureAndBalance) {
 TEST(SphPair, ForcesAreExactlyAntisymmetricAndConserveMomentum) {
   SphParams P;
   P.kernel = WendlandC2::make(0.013);
-  P.eos = TaitEos::make(1000, 15);
+  P.eos = TaitEos::make(1000, 15, -1e300);
   P.alpha = 0.05;
   P.gravity = {0, -9.81, 0};
   std::mt19937 rng(3);
@@ -153,6 +157,39 @@ TEST(SphPair, ForcesAreExactlyAntisymmetricAndConserveMomentum) {
       }
     EXPECT_LE(norm(total), 1e-14 * norm(scale));
   }
+}
+
+TEST(SphPair, BoundaryForceOnlyPushesAndDryWallsStandForAir) {
+  SphParams P;
+  P.kernel = WendlandC2::make(0.013);
+  P.eos = TaitEos::make(1000, 15, -1e300);  // tension allowed (fluid.min_pressure < 0)
+  P.alpha = 0.05;
+  const double m = 1000 * 1e-6;
+  const PairState wall{{0, 0, 0}, {0, 0, 0}, 1001, P.eos.pressure(1001), m};
+  const PairState fluid{{0.008, 0.003, 0}, {0, 0, 0}, 1000.5, P.eos.pressure(1000.5), m};
+  // Same as the fluid-fluid form for a wet wall and fluid under pressure.
+  const Vec3 a = sph_boundary_force(P, fluid, wall, true);
+  const Vec3 b = sph_pair_force(P, fluid, wall, true);
+  EXPECT_EQ(a.x, b.x);
+  EXPECT_EQ(a.y, b.y);
+  EXPECT_GT(a.x, 0.0) << "the wall pushes the fluid away";
+  // Fluid in tension next to a wet wall: pushed by the wall's pressure only, never pulled in.
+  PairState tense = fluid;
+  tense.rho = 995;
+  tense.p = P.eos.pressure(tense.rho);
+  ASSERT_LT(tense.p, 0.0);
+  EXPECT_GT(sph_boundary_force(P, tense, wall, false).x, 0.0);
+  EXPECT_LT(sph_pair_force(P, tense, wall, false).x, 0.0) << "the plain form would pull it in";
+  // A dry wall particle (p = 0): no pressure force; viscosity only.
+  PairState dry = wall;
+  dry.p = 0;
+  dry.rho = 1000;
+  const Vec3 d = sph_boundary_force(P, fluid, dry, false);
+  EXPECT_EQ(d.x, 0.0);
+  EXPECT_EQ(d.y, 0.0);
+  PairState moving = fluid;
+  moving.v = {-1, 0, 0};  // approaching: artificial viscosity acts
+  EXPECT_GT(sph_boundary_force(P, moving, dry, true).x, 0.0);
 }
 
 TEST(SphStage, FluidOnlyCloudConservesMomentum) {

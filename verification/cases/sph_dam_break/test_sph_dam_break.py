@@ -19,6 +19,7 @@ MM_Z = np.array([1.00, 1.11, 1.23, 1.44, 1.67, 1.89, 2.11, 2.33, 2.56, 2.78, 3.0
 MM_SHIFT = 0.175  # added to the simulated T: the experiment's gate needs time to open
 # Lobovsky et al. 2014, H = 0.3 m, gauge x = 0.300 m: h / H at T = t sqrt(g / H).
 LB_H, LB_X = 0.3, 0.300
+LB_TANK = (np.array([0.0, 0.0, 0.0]), np.array([1.61, 0.60, 0.08]))  # inner box, open top
 LB_T = np.array([0, 1, 2, 3, 4, 5, 6], dtype=float)
 LB_h = np.array([1.000, 0.931, 0.783, 0.632, 0.500, 0.402, 0.325])
 
@@ -69,6 +70,23 @@ def test_lobovsky_gauge(res, qdemsph, checks, case_out):
     hi = np.interp(LB_T, Ts, hs)
     checks.check(f"{res}.gauge_rms_error", rms(hi - LB_h), kind="max", tolerance=0.05, unit="H",
                  wall_s=run.solver_wall_s, backend=run.backend, note="water level h/H at x = 0.300 m, T = 0..6")
+    # Wall penetration after the far-wall impact: depth of fluid particle centres past the tank's
+    # inner surface (0.5 dx: the first wall layer; 3 dx: through the wall), splashes above the
+    # open top excluded.
+    depth_max, through, past = 0.0, 0, 0.0
+    lo, hi_box = LB_TANK
+    for f in frames:
+        x = f["x"][(f["type"] == 0) & (f["x"][:, 1] <= hi_box[1])]
+        d = np.maximum(lo - x, x - hi_box).max(axis=1) / dx
+        depth_max = max(depth_max, float(d.max()))
+        through = max(through, int((d > 3).sum()))
+        past = max(past, float((d > 0).mean()))
+    checks.check(f"{res}.particles_through_wall", through, kind="max", tolerance=0, unit="particles",
+                 note="fluid centres beyond the 3 wall layers in any frame")
+    checks.check(f"{res}.wall_penetration_max", depth_max, kind="max", tolerance=1.0, unit="dx",
+                 note="deepest fluid centre past the tank's inner surface in any frame (first wall layer at 0.5 dx)")
+    checks.info(f"{res}.fraction_past_wall_surface_max", past, unit="-",
+                note="largest fraction of fluid centres past the inner surface in one frame")
     fig = "sph_dam_break_lobovsky"
     meta = dict(title="Dam break water level at x = 0.300 m (Lobovsky et al. 2014)", xlabel="T = t sqrt(g/H)", ylabel="h/H")
     checks.series(fig, "Lobovsky et al. 2014", LB_T, LB_h, style="points", **meta)
