@@ -15,9 +15,10 @@
 # "gmsh is not available"; only .msh import and shogi meshing need it, which the GPU session
 # does not use (box meshes only).
 set -euo pipefail
-MPI=OFF; [ "${PACK_MPI:-0}" = 1 ] && MPI=ON
-BUILD=${BUILD:-build-cuda$([ $MPI = ON ] && echo -mpi)}
-PACK=${1:-build-cuda$([ $MPI = ON ] && echo -mpi)-pack}
+MPI=OFF SUFFIX=
+if [ "${PACK_MPI:-0}" = 1 ]; then MPI=ON SUFFIX=-mpi; fi
+BUILD=${BUILD:-build-cuda$SUFFIX}
+PACK=${1:-build-cuda$SUFFIX-pack}
 JOBS=${JOBS:-2}
 cd "$(dirname "$0")/../.."
 LAUNCH=()

@@ -34,6 +34,7 @@
 #include <map>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -41,6 +42,7 @@
 #include "contact/contact_sort_host.hpp"
 #include "contact/contact_state.hpp"
 #include "core/error.hpp"
+#include "core/error_flag.hpp"
 #include "core/memory.hpp"
 #include "core/timers.hpp"
 #include "model/model.hpp"
@@ -194,6 +196,11 @@ class ContactStage {
     nwv_ = static_cast<std::int64_t>(c.wall_vertices.size());
     nw_ = static_cast<std::int64_t>(c.walls.size());
     d_dem_ = c.d_dem;
+    max_pen_ = c.max_penetration;
+    pen_flag_.resize(1);
+    pen_flag_.zero();
+    pen_rec_.resize(1);
+    pen_val_.resize(2);
     self_ = c.self_contact;
     kn_factor_ = c.kn_factor;
     kt_ratio_ = c.kt_ratio;
@@ -865,6 +872,38 @@ class ContactStage {
         Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) { return act[c] ? d_dem - pxc[c].d : 0.0; },
         0.0);
     if (stats_.max_overlap > max_overlap_ever_) max_overlap_ever_ = stats_.max_overlap;
+    // Penetration guard: surfaces crossed deeper than the bound (contact.max_penetration, or
+    // half the pair's smaller mean surface edge) flag the first such contact found.
+    {
+      const auto bh = body_h_.cview();
+      const double mp = max_pen_;
+      unsigned long long* flag = pen_flag_.view().p;
+      ContactRecord* info = pen_rec_.view().p;
+      double* val = pen_val_.view().p;
+      for_each(
+          Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
+            if (!act[c]) return;
+            const ContactRecord& r = pxc[c];
+            const double h1 = bh[r.body1];
+            const double h = r.body2 >= 0 && bh[r.body2] < h1 ? bh[r.body2] : h1;
+            const double bound = mp > 0 ? mp : 0.5 * h;
+            if (-r.d > bound && raise_flag(flag, c)) {
+              info[0] = r;
+              val[0] = -r.d;
+              val[1] = bound;
+            }
+          });
+    }
+  }
+
+  // The contact flagged by the penetration guard since the last call, if any (clears it).
+  // Vertex and body indices are the uploaded model's.
+  std::optional<DeepContact> take_deep_contact() {
+    if (read_back(pen_flag_, 0) == 0) return std::nullopt;
+    const ContactRecord r = pen_rec_.to_host()[0];
+    const std::vector<double> val = pen_val_.to_host();
+    pen_flag_.zero();
+    return DeepContact{r.v[0], r.body1, r.body2, r.wall, val[0], val[1]};
   }
 
  private:
@@ -901,6 +940,10 @@ class ContactStage {
   std::int64_t rebuilds_ = 0;
   ContactStepStats stats_;
   double max_overlap_ever_ = 0;
+  double max_pen_ = 0;  // contact.max_penetration [m]; 0: half the pair's mean surface edge
+  Buffer<unsigned long long> pen_flag_{S};
+  Buffer<ContactRecord> pen_rec_{S};
+  Buffer<double> pen_val_{S};
   std::int64_t steps_ = 0;
   PhaseTimers timers_;
 };

@@ -19,6 +19,15 @@ struct ContactStepStats {
   double max_overlap = 0;  // max (D_DEM - d) over active contacts [m]
 };
 
+// A contact whose surfaces crossed deeper than the bound (contact.max_penetration): the
+// vertex on side 1 (point-face: the vertex; edge-edge: an end of the first edge), the two
+// bodies (body2 = -1: the wall `wall`), the depth -d and the bound [m].
+struct DeepContact {
+  std::int64_t vertex = -1;
+  int body1 = -1, body2 = -1, wall = -1;
+  double depth = 0, bound = 0;
+};
+
 struct ContactState {
   // Tangential history: one entry per record of the last force evaluation, sorted by key
   // (k1, k2) (contact/contact_record.hpp), with whether it was active, its spring xi, its

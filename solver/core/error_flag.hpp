@@ -9,13 +9,15 @@
 
 namespace qdemsph {
 
-QDEMSPH_HD void raise_flag(unsigned long long* flag, std::int64_t index) {
+// Returns true for the one call that set the flag (it may then record details of its
+// offender: no other call writes them until the flag is cleared).
+QDEMSPH_HD bool raise_flag(unsigned long long* flag, std::int64_t index) {
 #if defined(__CUDA_ARCH__)
-  atomicCAS(flag, 0ULL, static_cast<unsigned long long>(index) + 1ULL);
+  return atomicCAS(flag, 0ULL, static_cast<unsigned long long>(index) + 1ULL) == 0ULL;
 #else
   unsigned long long expected = 0;
-  __atomic_compare_exchange_n(flag, &expected, static_cast<unsigned long long>(index) + 1ULL, false,
-                              __ATOMIC_RELAXED, __ATOMIC_RELAXED);
+  return __atomic_compare_exchange_n(flag, &expected, static_cast<unsigned long long>(index) + 1ULL,
+                                     false, __ATOMIC_RELAXED, __ATOMIC_RELAXED);
 #endif
 }
 

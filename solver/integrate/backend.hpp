@@ -26,6 +26,13 @@ struct StaticStats {
   double rayleigh_den = 0;  // sum m' |u|^2 with the relaxation masses
 };
 
+// The smallest current stability limit of a free tet (physics/element.hpp, tet_critical_dt
+// at the deformed shape) and that tet (-1: no free tet).
+struct CriticalTet {
+  double dt = 0;
+  std::int64_t tet = -1;
+};
+
 struct HostFields {
   std::vector<Vec3> x, v;
   std::vector<std::array<double, 6>> stress;  // Cauchy: xx, yy, zz, yz, xz, xy
@@ -79,6 +86,9 @@ class Backend {
   virtual std::int64_t find_non_finite() = 0;
   // -1, or a tet whose det F <= 0 in the last compute_forces (clears the flag).
   virtual std::int64_t take_inverted_tet() = 0;
+  // The first contact found deeper than its bound since the last call (clears it), if any.
+  virtual std::optional<DeepContact> take_deep_contact() = 0;
+  virtual CriticalTet critical_tet() = 0;
   virtual HostFields download(bool with_stress) = 0;
   // The state between steps (BackendState): load_state after upload (and after the
   // Stepper's first force evaluation, which would overwrite f) restores a saved state

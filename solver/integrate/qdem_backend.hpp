@@ -314,6 +314,39 @@ class QdemBackend final : public Backend {
     return static_cast<std::int64_t>(f) - 1;
   }
 
+  std::optional<DeepContact> take_deep_contact() override {
+    if (!contact_) return std::nullopt;
+    return contact_->take_deep_contact();
+  }
+
+  // Two reductions over the free tets at their current shape: the largest 1 / dt_critical,
+  // then the smallest index reaching it (same arithmetic, so the comparison is exact).
+  CriticalTet critical_tet() override {
+    if (nft_ == 0) return {};
+    const CriticalRate rate{x_.cview(), tv_.cview(), tmat_.cview(), mats_.cview(), nt_};
+    const double rmax = reduce_max(
+        Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) { return rate(t); }, 0.0);
+    const double none = -static_cast<double>(nt_);
+    const double first = reduce_max(
+        Exec{}, nft_,
+        QDEMSPH_LAMBDA(std::int64_t t) { return rate(t) >= rmax ? -static_cast<double>(t) : none; },
+        none);
+    return {1.0 / rmax, static_cast<std::int64_t>(-first)};
+  }
+  // 1 / tet_critical_dt of tet t at the current positions.
+  struct CriticalRate {
+    Vec3CView x;
+    View<const std::int32_t> tv;
+    View<const std::int32_t> tmat;
+    View<const Material> mats;
+    std::int64_t nt;
+    QDEMSPH_HD double operator()(std::int64_t t) const {
+      Vec3 p[4];
+      for (int k = 0; k < 4; ++k) p[k] = x[tv[k * nt + t]];
+      return 1.0 / tet_critical_dt(mats[tmat[t]], min_altitude(p));
+    }
+  };
+
   HostFields download(bool with_stress) override {
     HostFields h;
     h.x = x_.to_host();

@@ -49,7 +49,7 @@ Stepper::Stepper(const Model& model, Backend& backend, double dt, int check_ever
       check_every_(std::max(1, check_every)),
       timers_([&backend] { backend.sync(); }) {
   be_.compute_forces(0.0, model_.mass_damping);
-  check();
+  check(false);
 }
 
 void Stepper::step() {
@@ -86,7 +86,7 @@ void Stepper::step() {
   if (n_ % check_every_ == 0) check();
 }
 
-void Stepper::check() const {
+void Stepper::check(bool dynamic) const {
   auto scope = timers_.scope("checks");
   const std::int64_t t = be_.take_inverted_tet();
   if (t >= 0)
@@ -94,6 +94,48 @@ void Stepper::check() const {
         "step {} (t = {:.6e} s): {} inverted (det F <= 0); the body was crushed or the run is "
         "unstable (dt = {:.3e} s, stability limit {:.3e} s)",
         n_, t_, describe_tet(model_, t), dt_, model_.dt_critical));
+  if (const auto c = be_.take_deep_contact()) {
+    const std::string other = c->body2 >= 0 ? fmt::format("body '{}'", model_.bodies[c->body2].name)
+                                            : fmt::format("wall {}", c->wall);
+    throw SimulationError(fmt::format(
+        "step {} (t = {:.6e} s): the surfaces of body '{}' and {} crossed by {:.3e} m, beyond "
+        "the penetration bound {:.3e} m (contact.max_penetration), at {}; the bodies are "
+        "passing through each other: reduce dt, stiffen the contact or refine the meshes",
+        n_, t_, model_.bodies[c->body1].name, other, c->depth, c->bound,
+        describe_vertex(model_, c->vertex)));
+  }
+  if (dynamic) {
+    const double h = dt_ / substeps_;
+    const CriticalTet ct = be_.critical_tet();
+    if (ct.tet >= 0 && h > ct.dt)
+      throw SimulationError(fmt::format(
+          "step {} (t = {:.6e} s): the time step {:.3e} s exceeds the stability limit {:.3e} s "
+          "of {} at its deformed shape (smallest altitude / P-wave speed); the body is being "
+          "crushed: use a smaller run.dt or dt_safety",
+          n_, t_, h, ct.dt, describe_tet(model_, ct.tet)));
+    if (fluid_) {
+      const SphDtLimits l = fluid_->dt_limits();
+      if (dt_ > kFluidDtGuard * l.min()) {
+        // The failure path only: find the fastest and the most accelerated fluid particle.
+        const FluidState s = fluid_->save_state();
+        std::size_t iv = 0, ia = 0;
+        for (std::size_t i = 0; i < s.x.size(); ++i) {
+          if (s.type[i] != kSphFluid) continue;
+          if (s.type[iv] != kSphFluid || norm(s.v[i]) > norm(s.v[iv])) iv = i;
+          if (s.type[ia] != kSphFluid || norm(s.a[i]) > norm(s.a[ia])) ia = i;
+        }
+        const bool cfl = l.cfl <= l.force;
+        const std::size_t k = cfl ? iv : ia;
+        throw SimulationError(fmt::format(
+            "step {} (t = {:.6e} s): the fluid step {:.3e} s exceeds {} x the fluid's stability "
+            "limit (CFL {:.3e} s, force {:.3e} s, viscous {:.3e} s), set by SPH particle {} at "
+            "({:.4g}, {:.4g}, {:.4g}) m moving at {:.4g} m/s with acceleration {:.4g} m/s^2: raise "
+            "fluid.sound_speed, lower run.dt or refine fluid.spacing",
+            n_, t_, dt_, kFluidDtGuard, l.cfl, l.force, l.viscous, s.gid[k], s.x[k].x, s.x[k].y,
+            s.x[k].z, norm(s.v[k]), norm(s.a[k])));
+      }
+    }
+  }
   if (fluid_) {
     const std::int64_t p = fluid_->find_non_finite();
     if (p >= 0)
@@ -141,14 +183,14 @@ RelaxResult Stepper::relax(double tolerance, std::int64_t max_steps, bool preloa
       const double c = std::min(2.0 * std::sqrt(w2), 1.0 / h);
       be_.damped_step(h, c);
       be_.compute_forces(0.0, 0.0);
-      if ((r.iterations + 1) % (10 * check_every_) == 0) check();
+      if ((r.iterations + 1) % (10 * check_every_) == 0) check(false);
       if (progress && r.iterations % 1000 == 0) progress(r.iterations, r.residual);
     }
   }
   be_.zero_velocity();
   be_.use_preload(false);
   be_.compute_forces(0.0, model_.mass_damping);
-  check();
+  check(false);
   return r;
 }
 

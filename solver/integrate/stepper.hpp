@@ -1,7 +1,9 @@
 // Time integration on top of a Backend: explicit velocity Verlet for dynamics and
 // dynamic relaxation (critically damped by a Rayleigh-quotient estimate of the lowest
-// frequency, Underwood 1983) for statics. Run-time guards turn NaN and inverted tets into
-// a SimulationError naming the element, its body and the time.
+// frequency, Underwood 1983) for statics. Run-time guards turn NaN, inverted tets, contacts
+// crossed beyond contact.max_penetration and a time step above the current stability limit
+// (of the deformed tets, or of the fluid) into a SimulationError naming the element, body or
+// particle and the time.
 #pragma once
 
 #include <algorithm>
@@ -36,8 +38,13 @@ class Stepper {
 
   // Velocity Verlet: v += dt/2 f/m; x += dt v; f = f(x, v); v += dt/2 f/m (solids and fluid).
   void step();
-  // Verifies positions/velocities are finite and no tet inverted; throws SimulationError.
-  void check() const;
+  // Verifies positions/velocities are finite, no tet inverted and no contact crossed beyond
+  // its bound; `dynamic`: also that the step is within the current stability limits of the
+  // tets and the fluid (sph_timestep.hpp, times kFluidDtGuard). Throws SimulationError.
+  void check(bool dynamic = true) const;
+  // The fluid's limits carry a safety factor of 4 (CFL 0.25, sph_timestep.hpp): the run
+  // stops once its fixed step exceeds twice them (Courant number 0.5).
+  static constexpr double kFluidDtGuard = 2.0;
 
   // Dynamic relaxation to max |f| <= tolerance * max |applied force|. With preload, the
   // preload set of dead loads is active during the solve and released afterwards.

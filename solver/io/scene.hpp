@@ -157,6 +157,9 @@ struct ContactSpec {
   std::string broad_phase = "polygons";  // polygons | surface_tets | all_tets (report Fig. 7)
   double stiffness_factor = 0.5;         // default k_n = factor * E_pair * h_pair
   std::optional<double> skin;  // pair-list Verlet skin [m]; absent: auto; 0: rebuild every step
+  // Penetration guard [m]: the run stops when surfaces cross deeper; absent: half the pair's
+  // smaller mean surface edge.
+  std::optional<double> max_penetration;
   std::vector<ContactPairSpec> pairs;
 };
 

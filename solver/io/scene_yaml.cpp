@@ -600,7 +600,7 @@ ContactSpec parse_contact(const Context& ctx, const Field& f,
                           const std::vector<MaterialSpec>& mats) {
   const MapView m(ctx, f,
                   {"mu", "restitution", "d_dem", "self_contact", "broad_phase", "stiffness_factor",
-                   "skin", "pairs"});
+                   "skin", "max_penetration", "pairs"});
   ContactSpec c;
   if (auto v = m.opt("mu")) c.mu = v->number(non_negative, "must be >= 0");
   if (auto v = m.opt("restitution")) c.restitution = restitution(*v);
@@ -610,6 +610,7 @@ ContactSpec parse_contact(const Context& ctx, const Field& f,
     c.broad_phase = v->choice({"polygons", "surface_tets", "all_tets"});
   if (auto v = m.opt("stiffness_factor")) c.stiffness_factor = v->number(positive, "must be > 0");
   if (auto v = m.opt("skin")) c.skin = v->number(non_negative, "must be >= 0 [m]");
+  if (auto v = m.opt("max_penetration")) c.max_penetration = v->number(positive, "must be > 0 [m]");
   if (auto v = m.opt("pairs")) {
     for (const auto& pf : v->list()) {
       const MapView pm(ctx, pf, {"materials", "mu", "restitution", "stiffness"});

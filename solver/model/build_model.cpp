@@ -11,6 +11,7 @@
 #include "mesh/shogi.hpp"
 #include "mesh/surface.hpp"
 #include "model/model.hpp"
+#include "model/overlap.hpp"
 #include "physics/element.hpp"
 
 namespace qdemsph {
@@ -80,7 +81,9 @@ void assign_relaxation_mass(Model& model) {
 
 }  // namespace
 
-Model build_model(const Scene& scene) {
+namespace {
+
+Model assemble(const Scene& scene) {
   Model model;
   model.gravity = scene.gravity;
   model.mass_damping = scene.mass_damping;
@@ -240,11 +243,26 @@ Model build_model(const Scene& scene) {
     }
   }
   build_contact_model(scene, model, tet_is_surface);
+  if (model.contact.enabled) check_initial_overlap(model);
   if (model.contact.enabled && model.contact.dt_limit > 0 && model.dt_critical_tet >= 0 &&
       model.contact.dt_limit < model.dt_critical)
     model.dt_critical = model.contact.dt_limit;
   assign_relaxation_mass(model);
   return model;
+}
+
+}  // namespace
+
+// Errors found while assembling (a region selecting nothing, bodies overlapping, a mesh file)
+// name the scene file first, like the parser's.
+Model build_model(const Scene& scene) {
+  try {
+    return assemble(scene);
+  } catch (const InputError& e) {
+    const std::string file = scene.file.string(), what = e.what();
+    if (file.empty() || what.rfind(file, 0) == 0) throw;
+    throw InputError(file + ": " + what);
+  }
 }
 
 }  // namespace qdemsph

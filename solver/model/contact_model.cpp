@@ -39,6 +39,7 @@ void build_contact_model(const Scene& scene, Model& model,
   c.self_contact = scene.contact.self_contact;
   c.kn_factor = scene.contact.stiffness_factor;
   c.skin = scene.contact.skin.value_or(-1.0);
+  c.max_penetration = scene.contact.max_penetration.value_or(0.0);
   c.mode = scene.contact.broad_phase == "all_tets"       ? BroadPhase::AllTets
            : scene.contact.broad_phase == "surface_tets" ? BroadPhase::SurfaceTets
                                                          : BroadPhase::Polygons;

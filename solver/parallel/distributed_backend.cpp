@@ -266,6 +266,36 @@ class DistributedImpl final : public DistributedBackend {
     return min_over_ranks(t < 0 ? -1 : L_.tets[t]);
   }
 
+  // The deep contact of the rank holding the smallest global vertex id among the flagged ones.
+  std::optional<DeepContact> take_deep_contact() override {
+    const std::optional<DeepContact> c = local_->take_deep_contact();
+    const std::int64_t gv = c ? L_.vertices[c->vertex] : -1;
+    const std::int64_t v = min_over_ranks(gv);
+    if (v < 0) return std::nullopt;
+    double mine[5] = {-1e300, -1e300, -1e300, -1e300, -1e300}, all[5];
+    if (c && gv == v) {
+      mine[0] = c->depth;
+      mine[1] = c->bound;
+      mine[2] = c->body1;
+      mine[3] = c->body2;
+      mine[4] = c->wall;
+    }
+    MPI_Allreduce(mine, all, 5, MPI_DOUBLE, MPI_MAX, comm_);
+    return DeepContact{
+        v,     static_cast<int>(all[2]), static_cast<int>(all[3]), static_cast<int>(all[4]), all[0],
+        all[1]};
+  }
+
+  // The smallest limit over the ranks' held tets; its tet by global id (the smallest).
+  CriticalTet critical_tet() override {
+    const CriticalTet c = local_->critical_tet();
+    const double dt = c.tet >= 0 ? c.dt : std::numeric_limits<double>::infinity();
+    double dmin = 0;
+    MPI_Allreduce(&dt, &dmin, 1, MPI_DOUBLE, MPI_MIN, comm_);
+    const std::int64_t t = min_over_ranks(c.tet >= 0 && dt == dmin ? L_.tets[c.tet] : -1);
+    return t < 0 ? CriticalTet{} : CriticalTet{dmin, t};
+  }
+
   // Global fields on rank 0: free vertices and tets from their owners / home ranks, fixed
   // bodies from the model (they never move) and the stress computed for them at upload.
   HostFields download(bool with_stress) override {

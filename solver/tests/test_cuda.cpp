@@ -17,6 +17,7 @@
 #include <random>
 #include <string>
 
+#include "core/error.hpp"
 #include "core/gpu_info.hpp"
 #include "core/memory.hpp"
 #include "integrate/backend.hpp"
@@ -311,6 +312,52 @@ TEST(Cuda, FlagsNameTheSameOffender) {
   EXPECT_EQ(q.gpu->find_non_finite(), 123);
   Pair r = make_pair(test_model());
   EXPECT_EQ(r.gpu->find_non_finite(), -1);
+}
+
+TEST(Cuda, CriticalTetMatchesCpu) {
+  SKIP_WITHOUT_GPU();
+  Pair p = make_pair(test_model());
+  const CriticalTet c = p.cpu->critical_tet(), g = p.gpu->critical_tet();
+  report("critical_tet.dt", std::fabs(g.dt - c.dt) / c.dt);
+  EXPECT_LT(std::fabs(g.dt - c.dt), 1e-12 * c.dt);
+  EXPECT_EQ(g.tet, c.tet);
+}
+
+TEST(Cuda, PenetrationGuardMatchesCpu) {
+  SKIP_WITHOUT_GPU();
+  // A cube thrown at a fixed block with a contact far too soft (tests/test_guards.cpp): both
+  // backends flag the same contact at the same step.
+  const Model m = build_model(parse_scene(R"(
+run: {end_time: 1}
+materials: {steel: {law: svk, E: 1.0e7, nu: 0.3, density: 1000}}
+bodies:
+  - {name: block, material: steel, fixed: true,
+     mesh: {type: box, origin: [-0.1, -0.1, -0.1], size: [0.2, 0.2, 0.1], cells: [4, 4, 2]}}
+  - {name: cube, material: steel, velocity: [0, 0, -5],
+     mesh: {type: box, origin: [-0.025, -0.025, 0.002], size: [0.05, 0.05, 0.05], cells: [2, 2, 2]}}
+contact: {d_dem: 0.001, stiffness_factor: 1.0e-5}
+)",
+                                          "guard.yaml"));
+  Pair p = make_pair(m);
+  const double dt = choose_dt(m, std::nullopt, 0.5);
+  Stepper sc(m, *p.cpu, dt, 1), sg(m, *p.gpu, dt, 1);
+  std::string ec, eg;
+  for (int n = 0; n < 200000 && ec.empty(); ++n) {
+    try {
+      sc.step();
+    } catch (const SimulationError& e) {
+      ec = e.what();
+    }
+    try {
+      sg.step();
+    } catch (const SimulationError& e) {
+      eg = e.what();
+    }
+  }
+  std::printf("[cuda-vs-cpu] guard cpu: %s\n[cuda-vs-cpu] guard gpu: %s\n", ec.c_str(), eg.c_str());
+  EXPECT_NE(ec.find("contact.max_penetration"), std::string::npos) << ec;
+  EXPECT_EQ(sg.steps(), sc.steps());
+  EXPECT_NE(eg.find("contact.max_penetration"), std::string::npos) << eg;
 }
 
 TEST(Cuda, ElementOnlyRunOf1000StepsAgreesToRoundOff) {

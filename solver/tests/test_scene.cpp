@@ -10,6 +10,7 @@
 
 #include "core/error.hpp"
 #include "io/scene_yaml.hpp"
+#include "model/model.hpp"
 
 #ifndef QDEMSPH_TEST_DATA
 #error "QDEMSPH_TEST_DATA must be the absolute path of solver/tests/data"
@@ -24,7 +25,7 @@ const fs::path kScenes = fs::path(QDEMSPH_TEST_DATA) / "scenes";
 
 std::string error_of(const fs::path& file, const std::vector<std::string>& overrides = {}) {
   try {
-    load_scene(file, overrides);
+    build_model(load_scene(file, overrides));  // the model's checks too (e.g. overlaps)
   } catch (const InputError& e) {
     return e.what();
   }
