@@ -18,7 +18,8 @@
 # SESSION_BUDGET_S (default 540) bounds the wall time: later steps shrink or are skipped once
 # it is spent (each step says so). Optional, each minutes: SESSION_LARGEST=1 adds the element
 # benchmark's largest size, STACK_CPU=1 the 27-cube stack on the CPU too, SPH_LARGE=N an SPH
-# run of N particles (5 steps) on the GPU.
+# run of N particles (5 steps) on the GPU, SPH_PROFILE=1 an Nsight Compute table of the SPH
+# step's kernels at 1 M particles.
 set -uo pipefail
 export PATH=$PATH:/usr/local/cuda/bin
 OUT=${1:?usage: ci/gpu_session.sh OUTDIR [PACK]}
@@ -199,6 +200,16 @@ if [ "${SPH_LARGE:-}" != "" ] && [ "$(left)" -gt 220 ]; then
   echo "BENCH_SPH_LARGE rc=$?"
 fi
 python3 "$ROOT/ci/gpu/sph_records.py" "$WORK" "$OUT/sph_bench.json"
+if [ "${SPH_PROFILE:-0}" = 1 ] && command -v ncu >/dev/null && [ "$(left)" -gt 120 ]; then
+  # Nsight Compute over one SPH step at 1 M particles (after the set-up and 20 steps): the time
+  # and DRAM traffic of each kernel, the table in session.log.
+  timeout 100 python3 "$ROOT/scaling/sph_bench.py" --qdemsph "$BIN/qdemsph" --backend cuda --particles 1e6 \
+    --steps 25 --wrap "ncu --clock-control none --launch-skip ${SPH_PROFILE_SKIP:-500} --launch-count 40 \
+    --metrics gpu__time_duration.sum,dram__bytes_read.sum,dram__bytes_write.sum,launch__registers_per_thread,sm__warps_active.avg.pct_of_peak_sustained_active,l1tex__t_sector_hit_rate.pct --log-file $WORK/ncu_sph.txt" \
+    >/dev/null 2>&1
+  echo "SPH_PROFILE rc=$?"
+  python3 "$ROOT/ci/gpu/ncu_table.py" "$WORK/ncu_sph.txt"
+fi
 
 step "benchmarks: element step (GPU, then CPU with $NCPU threads)"
 LARGEST=

@@ -80,6 +80,8 @@ def main():
     ap.add_argument("--steps", type=int, default=50)
     ap.add_argument("--qdemsph", default=os.environ.get("QDEMSPH", str(REPO / "build" / "bin" / "qdemsph")))
     ap.add_argument("--json", default=None, help="output record (default: print only)")
+    ap.add_argument("--wrap", default="", help="a command the solver run is started under, e.g. a "
+                    "profiler (ci/gpu_session.sh SPH_PROFILE=1 uses ncu)")
     a = ap.parse_args()
     runs = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -92,7 +94,8 @@ def main():
             end = a.steps * dtf * (1 - 1e-9)
             scene.write_text(SCENE.format(end=f"{end:.9g}", backend=a.backend, dx=f"{dx:.6g}", w=0.25))
             out = Path(tmp) / f"out_{int(target)}"
-            subprocess.run([a.qdemsph, "run", str(scene), "--out", str(out), "--quiet"], check=True)
+            subprocess.run(a.wrap.split() + [a.qdemsph, "run", str(scene), "--out", str(out), "--quiet"],
+                           check=True)
             s = json.loads((out / "summary.json").read_text())
             f = s["fluid"]
             n = f["n_fluid"] + f["n_wall"]
