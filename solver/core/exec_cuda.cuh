@@ -49,15 +49,10 @@ namespace cuda_detail {
 
 inline constexpr int kBlock = 256;
 inline constexpr int kMaxPartials = 1024;
-// Minimum resident blocks per SM asked of the register allocator for for_each kernels
-// (1: no cap; 4: at most 64 registers a thread).
-#ifndef QDEMSPH_CUDA_MIN_BLOCKS
-#define QDEMSPH_CUDA_MIN_BLOCKS 1
-#endif
-
-template <class F>
-__global__ void __launch_bounds__(kBlock, QDEMSPH_CUDA_MIN_BLOCKS)
-    for_each_kernel(std::int64_t n, F f) {
+// MinBlocks: resident blocks per SM asked of the register allocator (1: no cap; 3: at most
+// 85 registers a thread; 4: 64).
+template <int B, class F>
+__global__ void __launch_bounds__(kBlock, B) for_each_kernel(std::int64_t n, F f) {
   const std::int64_t stride = static_cast<std::int64_t>(blockDim.x) * gridDim.x;
   for (std::int64_t i = static_cast<std::int64_t>(blockIdx.x) * blockDim.x + threadIdx.x; i < n;
        i += stride)
@@ -117,13 +112,13 @@ double reduce(std::int64_t n, F f, Op op, double init) {
 
 }  // namespace cuda_detail
 
-template <class F>
-void for_each(CudaExec, std::int64_t n, F f) {
+template <class F, int B = 1>
+void for_each(CudaExec, std::int64_t n, F f, MinBlocks<B> = {}) {
   if (n <= 0) return;
   const std::int64_t want = (n + cuda_detail::kBlock - 1) / cuda_detail::kBlock;
   const std::int64_t cap = cuda_grid_cap();
   const int blocks = static_cast<int>(want < cap ? want : cap);
-  cuda_detail::for_each_kernel<<<blocks, cuda_detail::kBlock>>>(n, f);
+  cuda_detail::for_each_kernel<B><<<blocks, cuda_detail::kBlock>>>(n, f);
   QDEMSPH_CUDA_CHECK(cudaGetLastError(), "for_each kernel launch");
 }
 

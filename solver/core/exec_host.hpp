@@ -17,8 +17,8 @@ struct HostExec {
 // than a small loop's work, and far more when the cores are shared.
 inline constexpr std::int64_t kMinParallel = 4096;
 
-template <class F>
-void for_each(HostExec, std::int64_t n, F f) {
+template <class F, int N = 1>
+void for_each(HostExec, std::int64_t n, F f, MinBlocks<N> = {}) {
 #pragma omp parallel for schedule(static) if (n >= kMinParallel)
   for (std::int64_t i = 0; i < n; ++i) f(i);
 }

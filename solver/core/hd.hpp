@@ -8,3 +8,11 @@
 #define QDEMSPH_HD inline
 #define QDEMSPH_LAMBDA [=]
 #endif
+
+namespace qdemsph {
+// Launch hint for for_each: keep at least N blocks of 256 threads resident per SM on CUDA
+// (caps the registers a thread at 65536 / (256 N)); the host ignores it. For register-heavy
+// loops whose occupancy, not their arithmetic, limits them (sph/sph_stage.hpp).
+template <int N>
+struct MinBlocks {};
+}  // namespace qdemsph

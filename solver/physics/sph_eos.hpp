@@ -22,6 +22,7 @@ namespace qdemsph {
 
 struct TaitEos {
   double rho0 = 1000;  // reference density [kg/m^3]
+  double inv_rho0 = 1e-3;
   double c0 = 10;      // reference sound speed [m/s]
   double B = 0;        // c0^2 rho0 / gamma [Pa]
   double p_min = 0;    // tension cut-off [Pa] (<= 0; -1e300: none)
@@ -32,6 +33,7 @@ struct TaitEos {
   static TaitEos make(double rho0, double c0, double p_min = 0.0) {
     TaitEos e;
     e.rho0 = rho0;
+    e.inv_rho0 = 1.0 / rho0;
     e.c0 = c0;
     e.B = c0 * c0 * rho0 / gamma;
     e.p_min = p_min;
@@ -39,7 +41,7 @@ struct TaitEos {
     return e;
   }
   QDEMSPH_HD double pressure(double rho) const {
-    const double r = rho / rho0;
+    const double r = rho * inv_rho0;
     const double r2 = r * r, r4 = r2 * r2;
     const double p = B * (r4 * r2 * r - 1.0);
     return p > p_min ? p : p_min;
@@ -49,7 +51,7 @@ struct TaitEos {
     return rho0 * pow(s > 1e-6 ? s : 1e-6, 1.0 / gamma);
   }
   QDEMSPH_HD double sound_speed(double rho) const {
-    const double r = rho / rho0;
+    const double r = rho * inv_rho0;
     return c0 * r * r * r;  // (rho/rho0)^((7-1)/2)
   }
 };

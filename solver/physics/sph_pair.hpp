@@ -5,6 +5,8 @@
 //   F_ij = -m_i m_j (p_i/rho_i^2 + p_j/rho_j^2 + Pi_ij) grad_i W_ij  [+ laminar term]
 // Artificial viscosity (Monaghan 1992), only for approaching pairs (v_ij . r_ij < 0):
 //   Pi_ij = -alpha cbar h mu_ij / rhobar,  mu_ij = v_ij . r_ij / (r^2 + eta^2),  eta = 0.1 h
+//         = -alpha (c_i + c_j) h (v_ij . r_ij) / ((r^2 + eta^2)(rho_i + rho_j))  (one division)
+// Each particle's p/rho^2 is computed once per step (PairState::pr), not once per pair.
 // Laminar viscosity (Lo & Shao 2002, as in DualSPHysics), nu kinematic [m^2/s]:
 //   F_ij += m_i m_j 4 nu (r_ij . grad_i W_ij) / ((rho_i + rho_j)(r^2 + eta^2)) v_ij
 // Every factor is symmetric in (i, j) and r_ij, v_ij change sign exactly: F_ji = -F_ij bit for
@@ -39,10 +41,14 @@ struct SphParams {
   Vec3 gravity{0, 0, 0};
 };
 
+// A particle's state as a pair interaction reads it: pr = p / rho^2 (its sign is p's).
 struct PairState {
   Vec3 x, v;
-  double rho, p, m;
+  double rho, m, pr;
 };
+QDEMSPH_HD PairState pair_state(Vec3 x, Vec3 v, double rho, double p, double m) {
+  return {x, v, rho, m, p / (rho * rho)};
+}
 
 // The pair force for a given pressure coefficient s (p_i/rho_i^2 + p_j/rho_j^2 or the boundary
 // form below); adds the viscosity term when `viscous`.
@@ -59,10 +65,8 @@ QDEMSPH_HD Vec3 sph_pair_force_with(const SphParams& P, const PairState& a, cons
     const double vr = dot(vij, r);
     if (P.visc_type == SphViscosity::Artificial) {
       if (vr < 0.0) {
-        const double cbar = 0.5 * (P.eos.sound_speed(a.rho) + P.eos.sound_speed(b.rho));
-        const double rhobar = 0.5 * (a.rho + b.rho);
-        const double mu = P.kernel.h * vr / (r2 + eta2);
-        s += -P.alpha * cbar * mu / rhobar;
+        const double c2 = P.eos.sound_speed(a.rho) + P.eos.sound_speed(b.rho);
+        s -= P.alpha * c2 * P.kernel.h * vr / ((r2 + eta2) * (a.rho + b.rho));
       }
     } else {
       const double k = 4.0 * P.nu * (r2 * F) / ((a.rho + b.rho) * (r2 + eta2));
@@ -76,7 +80,7 @@ QDEMSPH_HD Vec3 sph_pair_force_with(const SphParams& P, const PairState& a, cons
 // viscosity term.
 QDEMSPH_HD Vec3 sph_pair_force(const SphParams& P, const PairState& a, const PairState& b,
                                bool viscous) {
-  return sph_pair_force_with(P, a, b, a.p / (a.rho * a.rho) + b.p / (b.rho * b.rho), viscous);
+  return sph_pair_force_with(P, a, b, a.pr + b.pr, viscous);
 }
 
 // Force on fluid particle f from boundary particle w (wall or body marker, pressure p_w >= 0
@@ -91,8 +95,7 @@ QDEMSPH_HD Vec3 sph_pair_force(const SphParams& P, const PairState& a, const Pai
 // 0.8 % of the weight to the floor). Viscosity as between fluid particles.
 QDEMSPH_HD Vec3 sph_boundary_force(const SphParams& P, const PairState& f, const PairState& w,
                                    bool viscous) {
-  const double s =
-      w.p > 0.0 ? (f.p > 0.0 ? f.p / (f.rho * f.rho) : 0.0) + w.p / (w.rho * w.rho) : 0.0;
+  const double s = w.pr > 0.0 ? (f.pr > 0.0 ? f.pr : 0.0) + w.pr : 0.0;
   return sph_pair_force_with(P, f, w, s, viscous);
 }
 
@@ -109,8 +112,8 @@ QDEMSPH_HD double sph_density_rate(const SphParams& P, const PairState& a, const
     const double drho_h = P.eos.rho0 * dot(P.gravity, b.x - a.x) / (c0 * c0);
     const double eta2 = 0.01 * P.kernel.h * P.kernel.h;
     // (x_j - x_i) . grad_i W = -r^2 F >= 0
-    d += P.delta * P.kernel.h * c0 * (b.m / b.rho) * 2.0 * (b.rho - a.rho - drho_h) * (-r2 * F) /
-         (r2 + eta2);
+    d += P.delta * P.kernel.h * c0 * b.m * 2.0 * (b.rho - a.rho - drho_h) * (-r2 * F) /
+         (b.rho * (r2 + eta2));
   }
   return d;
 }

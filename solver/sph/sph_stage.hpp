@@ -8,7 +8,9 @@
 // Wall particles are fixed; markers move with the bodies (sph/solid_coupling.hpp); the p and rho
 // of both come from the fluid by Adami extrapolation.
 //
-// Per pair evaluation (fluid-fluid): ~150 flops, reads 2 x 9 doubles; per particle and step
+// Per pair evaluation (fluid-fluid): ~150 flops, reads 2 x 9 doubles (pr = p / rho^2 computed
+// once per particle after the equation of state, so the force pass divides once per pair, in
+// the artificial viscosity of approaching pairs); per particle and step
 // ~3 passes over ~75 neighbours (Wendland C2 at h = 1.3 dx, support 2h).
 #pragma once
 
@@ -78,6 +80,7 @@ class SphStage final : public FluidStage {
     rho_.assign(f.rho);
     p_.assign(f.p);
     drho_.resize(n_);
+    pr_.resize(n_);
     m_.assign(f.m);
     type_.assign(f.type);
     gid_.assign(f.gid);
@@ -128,23 +131,26 @@ class SphStage final : public FluidStage {
     // (a density lagging half a step behind the positions makes the acoustic modes grow).
     for_each(
         Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) {
-          const PairState si{x[i], v[i], rho[i], 0.0, m[i]};
+          const PairState si{x[i], v[i], rho[i], m[i], 0.0};
           double dr = 0;
           const double s2 = P.kernel.support2;
           sph_for_each_near(g, start, kGroupFluid, kSphGroups, si.x, [&](std::int64_t j) {
             const Vec3 xj = x[j];
             if (j == i || norm2(si.x - xj) >= s2) return;  // most candidates: no further loads
-            const PairState sj{xj, v[j], rho[j], 0.0, m[j]};
+            const PairState sj{xj, v[j], rho[j], m[j], 0.0};
             dr += sph_density_rate(P, si, sj, j < nf);
           });
           drho[i] = dr;
         });
-    // Equation of state (fluid), density floored at the tension cut-off (sph_eos.hpp).
+    // Equation of state (fluid), density floored at the tension cut-off (sph_eos.hpp); the
+    // pair term p / rho^2 of every particle once (sph_pair.hpp).
+    const auto pr = pr_.view();
     for_each(
         Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) {
           const double r = rho[i] + ddt * drho[i];
           rho[i] = r > P.eos.rho_min ? r : P.eos.rho_min;
           p[i] = P.eos.pressure(rho[i]);
+          pr[i] = p[i] / (rho[i] * rho[i]);
         });
     // Wall and marker pressure and density by extrapolation from the fluid (Adami, with gravity
     // only: solid_coupling.hpp says why a body's acceleration is left out). Mass rho V with the
@@ -165,6 +171,7 @@ class SphStage final : public FluidStage {
             const double pw = adami_pressure(s, P.gravity, Vec3{});
             p[i] = pw;
             rho[i] = P.eos.density(pw);
+            pr[i] = pw / (rho[i] * rho[i]);
             m[i] = rho[i] * (q < nm ? mvol[gid[i] - g0] : wall_volume);
           });
     }
@@ -172,19 +179,21 @@ class SphStage final : public FluidStage {
     const auto a = a_.view();
     const bool wall_visc = P.wall_viscosity;
     for_each(
-        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) {
-          const PairState si{x[i], v[i], rho[i], p[i], m[i]};
+        Exec{}, nf,
+        QDEMSPH_LAMBDA(std::int64_t i) {
+          const PairState si{x[i], v[i], rho[i], m[i], pr[i]};
           Vec3 f{};
           const double s2 = P.kernel.support2;
           sph_for_each_near(g, start, kGroupFluid, kSphGroups, si.x, [&](std::int64_t j) {
             const Vec3 xj = x[j];
             if (j == i || norm2(si.x - xj) >= s2) return;
-            const PairState sj{xj, v[j], rho[j], p[j], m[j]};
+            const PairState sj{xj, v[j], rho[j], m[j], pr[j]};
             f +=
                 j < nf ? sph_pair_force(P, si, sj, true) : sph_boundary_force(P, si, sj, wall_visc);
           });
           a.set(i, P.gravity + f / si.m);
-        });
+        },
+        MinBlocks<3>{});  // 90 registers left 2 blocks an SM; 3 fit in 85 (80, 28 B spilled)
     if (coupling_) {
       // The fluid's force on each marker: the exact negative of each pair force the marker
       // exerts on the fluid (sph_pair.hpp), so the coupling conserves momentum.
@@ -193,13 +202,13 @@ class SphStage final : public FluidStage {
       for_each(
           Exec{}, nm_, QDEMSPH_LAMBDA(std::int64_t q) {
             const std::int64_t i = nf + q;
-            const PairState si{x[i], v[i], rho[i], p[i], m[i]};
+            const PairState si{x[i], v[i], rho[i], m[i], pr[i]};
             Vec3 f{};
             const double s2 = P.kernel.support2;
             sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, si.x, [&](std::int64_t j) {
               const Vec3 xj = x[j];
               if (norm2(si.x - xj) >= s2) return;
-              const PairState sj{xj, v[j], rho[j], p[j], m[j]};
+              const PairState sj{xj, v[j], rho[j], m[j], pr[j]};
               f -= sph_boundary_force(P, sj, si, wall_visc);
             });
             F.set(static_cast<std::int64_t>(gid[i] - g0), f);
@@ -297,7 +306,7 @@ class SphStage final : public FluidStage {
   const SphParams& params() const override { return P_; }
   std::size_t device_bytes() const override {
     return x_.bytes() + v_.bytes() + a_.bytes() + rho_.bytes() + p_.bytes() + drho_.bytes() +
-           m_.bytes() + type_.bytes() + gid_.bytes() + tmp3_.bytes() + tmpd_.bytes() +
+           pr_.bytes() + m_.bytes() + type_.bytes() + gid_.bytes() + tmp3_.bytes() + tmpd_.bytes() +
            tmpu_.bytes() + tmpt_.bytes() + keys_.bytes() + start_.bytes() + order_.bytes() +
            scratch_.bytes() + (coupling_ ? coupling_->bytes() : 0);
   }
@@ -353,6 +362,7 @@ class SphStage final : public FluidStage {
   double wall_volume_ = 0;  // dx^3
   Vec3Buffer x_{S}, v_{S}, a_{S}, tmp3_{S};
   Buffer<double> rho_{S}, p_{S}, drho_{S}, m_{S}, tmpd_{S};
+  Buffer<double> pr_{S};  // p / rho^2 of this step (set after the sort, not carried over)
   Buffer<std::uint8_t> type_{S}, tmpt_{S};
   Buffer<std::uint64_t> gid_{S}, tmpu_{S};
   CellGrid grid_;
