@@ -129,17 +129,31 @@ def plots(recs):
     figs, md = [], []
     ser = series(recs)
     for (sweep, backend, variant, mach), rs in sorted(ser.items()):
+        if variant == "copies":  # the node baseline: columns of its weak series (below)
+            continue
         mode = rs[0]["mode"]
         rows = efficiencies(rs, mode)
+        # Node factor and the decomposition's own efficiency from N independent copies of the
+        # 1-rank run on the same machine (run.py --launcher copies).
+        cop = {r["ranks"]: r["step_s"] for r in ser.get((sweep, backend, "copies", mach), [])}
+        t1 = next((r["step_s"] for r in rs if r["ranks"] == 1), None)
+        for row in rows:
+            if row["ranks"] in cop and t1:
+                row["node"] = t1 / cop[row["ranks"]]
+                row["decomp"] = cop[row["ranks"]] / row["step_s"]
         ranks = [r["ranks"] for r in rs]
         tag = f"{sweep}_{backend}" + (f"_{variant}" if variant else "")
         md.append(f"\n### {sweep} ({mode}, {backend}{', ' + variant if variant else ''}) on {mach}\n")
-        md.append("| ranks | tets | particles | ms/step | E vs 1 | E vs 8 | imbalance | halo MB/step |")
-        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|")
+        if cop:
+            md.append("E vs 1 = node x decomposition: *node* = t(1) / t(N copies of the 1-rank run at once, "
+                      "one per core), *decomposition* = t(N copies) / t(N ranks).\n")
+        md.append("| ranks | tets | particles | ms/step | E vs 1 | E vs 8 | node | decomposition | imbalance | halo MB/step |")
+        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
         for row in rows:
             f = lambda v, s="{:.3f}": "" if v is None else s.format(v)  # noqa: E731
             md.append(f"| {row['ranks']} | {row['size']['n_tets']:,} | {row['size']['n_particles']:,} | "
                       f"{row['step_s'] * 1e3:.2f} | {f(row.get('E1'))} | {f(row.get('E8'))} | "
+                      f"{f(row.get('node'))} | {f(row.get('decomp'))} | "
                       f"{f(row['imbalance'])} | {f(None if row['halo_bytes_per_step'] is None else row['halo_bytes_per_step'] / 1e6, '{:.2f}')} |")
         pred = model_line(rs, sweep, backend, ranks) if mode == "weak" and not variant and len(rs) > 1 else None
         if pred:
@@ -156,6 +170,13 @@ def plots(recs):
         if any("E8" in r for r in rows):
             ax[1].plot([r["ranks"] for r in rows if "E8" in r], [r["E8"] for r in rows if "E8" in r], "s-",
                        label="measured, vs 8 ranks")
+        if any("decomp" in r for r in rows):
+            ax[1].plot([r["ranks"] for r in rows if "decomp" in r], [r["decomp"] for r in rows if "decomp" in r],
+                       "^-", label="decomposition only (vs N independent copies)")
+            ax[1].plot([r["ranks"] for r in rows if "node" in r], [r["node"] for r in rows if "node" in r], "v:",
+                       color="0.4", label="node: N independent copies vs 1")
+            ax[0].plot(sorted(cop), [cop[n] * 1e3 for n in sorted(cop)], "v:", color="0.4",
+                       label="N independent copies of the 1-rank run")
         if pred:
             ax[0].plot([p["ranks"] for p in pred[0]], [p["step_s"] * 1e3 for p in pred[0]], "--", color="0.5",
                        label=f"model prediction ({pred[1]})")

@@ -17,6 +17,12 @@ Launch (stated in every record under `launch`):
   srun     inside a Slurm allocation: srun -n N --cpus-per-task=T --cpu-bind=cores
            [--gpus-per-task=1] (see scaling/slurm/).
   none     the binary directly (one rank; the single-rank calibration runs).
+  copies   weak sweeps only, the node's baseline: N independent one-rank runs of the 1-rank
+           scene at once, each pinned to its own core (taskset), no MPI. Their time per step
+           (the slowest copy) over the 1-rank time is what sharing the node costs (memory
+           bandwidth, caches, clock) before any communication; records carry variant
+           "copies". report.py splits the weak efficiency into this node factor and the
+           decomposition's own: E(N) = t(1)/t(N) = [t(1)/t_copies(N)] x [t_copies(N)/t(N)].
 
 Time per step. `step_s` = sum over the top-level phases of summary.json (per-rank mean
 `parallel.phases_mean` when distributed, else `phases`) without "output", "migration" and
@@ -102,6 +108,9 @@ def launch_command(launcher: str, ranks: int, threads: int, backend: str, cores:
     env = {"OMP_NUM_THREADS": str(threads), "OMP_PROC_BIND": "close", "OMP_PLACES": "cores",
            "PMIX_MCA_pcompress_base_silence_warning": "1"}
     facts = {"launcher": launcher, "ranks": ranks, "threads_per_rank": threads, "backend": backend}
+    if launcher == "copies":
+        facts["binding"] = f"{ranks} independent processes, process k pinned to core k (taskset)"
+        return [], env, facts
     if launcher == "none":
         if ranks != 1:
             raise ValueError("--launcher none runs one rank")
@@ -177,6 +186,35 @@ def make_record(meta, launch, summary, facts, run_wall, status, note="") -> dict
     return rec
 
 
+def run_copies(n, cmd, rd, env, limit, cores):
+    """n copies of `cmd` (its --out replaced by rd/k), copy k pinned to core k; (status, note,
+    the slowest copy's summary with "copies_step_s": every copy's step time)."""
+    procs = []
+    rd.mkdir(parents=True, exist_ok=True)
+    pin = shutil.which("taskset") and n <= cores
+    for k in range(n):
+        c = cmd[:cmd.index("--out") + 1] + [str(rd / str(k))] + cmd[cmd.index("--out") + 2:]
+        procs.append(subprocess.Popen((["taskset", "-c", str(k)] if pin else []) + c, env=env,
+                                      stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True))
+    t_end = time.time() + limit
+    errs = []
+    for p in procs:
+        try:
+            _, err = p.communicate(timeout=max(1.0, t_end - time.time()))
+        except subprocess.TimeoutExpired:
+            for q in procs:
+                q.kill()
+            raise
+        if p.returncode != 0:
+            errs.append(f"exit {p.returncode}: {err[-500:]}")
+    if errs:
+        return "failed", "; ".join(errs), None
+    sums = [json.loads((rd / str(k) / "summary.json").read_text()) for k in range(n)]
+    times = [step_seconds(s)["step_s"] for s in sums]
+    worst = dict(sums[times.index(max(times))], copies_step_s=times)
+    return "ok", "" if pin else "not pinned (no taskset, or more copies than cores)", worst
+
+
 def run_sweep(a) -> list[dict]:
     sw = scenes.SWEEPS[a.sweep]
     ranks = [int(x) for x in a.ranks.split(",")] if a.ranks else sw["ranks"]
@@ -201,13 +239,20 @@ def run_sweep(a) -> list[dict]:
     records = []
     print(f"# {a.sweep} ({sw['mode']}, {a.backend} preset) ranks {ranks} variants {variants}: dt {dt_fixed:.6g} s, "
           f"end_time {end_time:.6g} s ({round(end_time / dt_fixed)} steps), {threads} thread(s) per rank", flush=True)
+    if a.launcher == "copies":
+        if sw["mode"] != "weak":
+            raise SystemExit("--launcher copies is the baseline of weak sweeps")
+        variants = ["copies"]
     for n in ranks:
         for var in variants:
             left = a.budget - (time.time() - t_start) if a.budget else None
             if left is not None and left < 1.3 * last * max(1, a.repeat) + 10:
                 print(f"skip N={n} {var or ''}: {left:.0f} s of budget left, the last run took {last:.0f} s", flush=True)
                 continue
-            scene, meta = scenes.scene_for(a.sweep, n, a.backend, var)
+            copies = var == "copies"
+            scene, meta = scenes.scene_for(a.sweep, 1 if copies else n, a.backend, None if copies else var)
+            if copies:
+                meta = dict(meta, variant="copies")
             scene["run"].update({"dt": float(f"{dt_fixed:.9g}"), "end_time": float(f"{end_time:.9g}")})
             if a.backend == "cuda":
                 scene["run"]["threads"] = threads
@@ -219,6 +264,8 @@ def run_sweep(a) -> list[dict]:
                                                  shlex.split(a.mpirun_args or ""))
             cmd = prefix + [qd, "run", str(sp), "--out", str(rd), "--quiet"]
             launch["command"] = shlex.join(cmd)
+            if copies:
+                launch["command"] = f"{n} x taskset -c k {shlex.join(cmd)}/k"
             print(f"$ {launch['command']}", flush=True)
             best, tries = None, []
             for _ in range(max(1, a.repeat)):
@@ -227,14 +274,20 @@ def run_sweep(a) -> list[dict]:
                 shutil.rmtree(rd, ignore_errors=True)
                 limit = left if left is not None and left < a.timeout else a.timeout
                 try:
-                    p = subprocess.run(cmd, env=dict(os.environ, **env), capture_output=True, text=True, timeout=limit)
-                    if p.returncode != 0:
-                        status, note = "failed", f"exit {p.returncode}: {(p.stderr or p.stdout)[-2000:]}"
+                    if copies:
+                        status, note, summary = run_copies(n, cmd, rd, dict(os.environ, **env), limit, cores)
+                    else:
+                        p = subprocess.run(cmd, env=dict(os.environ, **env), capture_output=True, text=True,
+                                           timeout=limit)
+                        if p.returncode != 0:
+                            status, note = "failed", f"exit {p.returncode}: {(p.stderr or p.stdout)[-2000:]}"
                 except subprocess.TimeoutExpired:
                     status, note = "timeout", f"killed after {limit:.0f} s (time limit of the run or what was left of the budget)"
                 last = time.time() - t0
                 sj = rd / "summary.json"
-                if sj.exists():
+                if copies and status == "ok":
+                    pass  # run_copies gave the slowest copy's summary
+                elif sj.exists():
                     summary = json.loads(sj.read_text())
                     par = summary.get("parallel") or {}
                     if n > 1 and par.get("ranks") != n:
@@ -251,6 +304,8 @@ def run_sweep(a) -> list[dict]:
             if status == "ok" and best:
                 _, summary, last = best  # the fastest of the repeats (least disturbed by other load)
             rec = make_record(meta, launch, summary, facts, last, status, note)
+            if copies:
+                rec["ranks"], rec["copies_step_s"] = n, (summary or {}).get("copies_step_s")
             rec["dt"], rec["end_time"] = dt_fixed, end_time
             if len(tries) > 1:
                 rec["repeats_step_s"] = tries
@@ -265,8 +320,9 @@ def run_sweep(a) -> list[dict]:
             else:
                 print(f"  N={n} {status}: {note[:500]}", flush=True)
             if not a.keep:  # field snapshots are large; the record holds what is measured
-                for f in ("fields.h5", "fluid.h5"):
-                    (rd / f).unlink(missing_ok=True)
+                for f in ("fields.h5", "fluid.h5", "*/fields.h5", "*/fluid.h5"):
+                    for g in rd.glob(f):
+                        g.unlink()
             if status == "not-distributed":
                 print("  stopping: this binary has no distributed stepper", flush=True)
                 return records
@@ -284,7 +340,7 @@ def main(argv=None):
     ap.add_argument("--backend", default="cpu", choices=["cpu", "cuda"], help="backend and size preset")
     ap.add_argument("--threads", type=int, default=0, help="OpenMP threads per rank (default: 1 for cpu, cores/ranks for cuda)")
     ap.add_argument("--variants", help="e.g. balanced,static (default: the sweep's)")
-    ap.add_argument("--launcher", default="mpirun", choices=["mpirun", "srun", "none"])
+    ap.add_argument("--launcher", default="mpirun", choices=["mpirun", "srun", "none", "copies"])
     ap.add_argument("--mpirun-args", default="", help="extra launcher arguments (one string)")
     ap.add_argument("--qdemsph", default=os.environ.get("QDEMSPH", str(REPO / "build" / "bin" / "qdemsph")))
     ap.add_argument("--steps", type=int, default=0, help="timed steps (default: the preset's)")
