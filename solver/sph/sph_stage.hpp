@@ -312,8 +312,8 @@ class SphStage final : public FluidStage {
   }
 
   // Public only because nvcc's extended lambdas need an accessible enclosing function.
-  // Stable sort by (group, cell) (sort_by_key, neighbor/cell_grid.hpp), then every
-  // per-particle array gathered into the new order.
+  // Stable sort by (group, cell) (sort_by_key, neighbor/cell_grid.hpp), then the per-particle
+  // arrays that carry state across steps gathered into the new order.
   void sort() {
     if (keys_.size() != n_) keys_.resize(n_);
     const auto k = keys_.view();
@@ -327,12 +327,11 @@ class SphStage final : public FluidStage {
     if (order_.size() != n_) order_.resize(n_);
     sort_by_key(Exec{}, keys_.cview(), kSphGroups * nc, start_.view(), order_.view(), scratch_);
     const auto ord = order_.cview();
+    // a, p and drho are not carried: compute() rewrites them (fluid: density, EOS and force
+    // passes; boundary: Adami) before anything reads them.
     permute3(x_, ord);
     permute3(v_, ord);
-    permute3(a_, ord);
     permute(rho_, tmpd_, ord);
-    permute(p_, tmpd_, ord);
-    permute(drho_, tmpd_, ord);
     permute(m_, tmpd_, ord);
     permute(type_, tmpt_, ord);
     permute(gid_, tmpu_, ord);
