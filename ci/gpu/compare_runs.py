@@ -51,7 +51,7 @@ def main():
     out["energy_max_rel"] = max(abs(eg[k] - ec[k]) / scale for k in terms)
     if "contact" in sc:
         out["contact_counts"] = {k: [sc["contact"].get(k), sg.get("contact", {}).get(k)]
-                                 for k in ("pairs", "contacts", "active", "fill_mismatches")}
+                                 for k in ("pairs", "contacts", "active")}
     out["wall_s"] = [sc.get("wall_s"), sg.get("wall_s")]
     try:
         fc, fg = last_frame(f"{cdir}/fields.h5"), last_frame(f"{gdir}/fields.h5")

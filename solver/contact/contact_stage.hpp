@@ -10,7 +10,9 @@
 //     has moved by skin / 2 (Verlet skin, skin = D_DEM + max r / 4);
 //  2. narrow phase over the triangles each primitive owns: point-face and edge-edge
 //     (physics/contact_geometry.hpp) for the features each triangle owns, plus surface
-//     vertices against analytic walls; records counted, scanned, filled, sorted by key;
+//     vertices against analytic walls; records appended in one pass through an atomic
+//     counter (cheap plane-distance and edge-midpoint tests skip features that cannot
+//     touch), then sorted by key (unique per feature pair, so the order is deterministic);
 //     of several point-face hits of one vertex on one body only the one with the largest
 //     signed gap is kept (a vertex on a shared edge is one touch, not two);
 //  3. force: the DEM law (physics/contact_law.hpp) between virtual particles of diameter
@@ -77,10 +79,14 @@ struct ContactTopology {
     return tri_vertex(s, 0) == v || tri_vertex(s, 1) == v || tri_vertex(s, 2) == v;
   }
 
-  // Contacts between the features owned by triangles a and b; writes the first `cap` of them
-  // to out (if not null) and returns how many there are.
-  QDEMSPH_HD int narrow_tris(Vec3CView x, std::int64_t a, std::int64_t b, ContactRecord* out,
-                             std::int64_t cap) const {
+  // Contacts between the features owned by triangles a and b: emit(record) for each.
+  // Two conservative early-outs skip the exact tests of features that cannot touch: a vertex
+  // whose distance from the other triangle's plane (this step's unit normal) is outside the
+  // accepted gaps by more than round-off, and two edges whose midpoints are farther apart
+  // than their half-lengths plus D_DEM (a valid edge-edge touch has |d| = |p - q| < D_DEM).
+  // The exact tests decide every other case, so the records are those of testing everything.
+  template <class Emit>
+  QDEMSPH_HD void narrow_tris(Vec3CView x, std::int64_t a, std::int64_t b, Emit&& emit) const {
     const int ba = tri_body[a], bb = tri_body[b];
     const bool same = ba == bb;
     const double ha = body_h[ba], hb = body_h[bb];
@@ -90,19 +96,22 @@ struct ContactTopology {
       pa[k] = x[tri_vertex(a, k)];
       pb[k] = x[tri_vertex(b, k)];
     }
-    int n = 0;
+    const double tol = 1e-9 * pen;  // >> the round-off of a plane distance, << any gap
     // Point-face both ways.
     for (int side = 0; side < 2; ++side) {
       const std::int64_t s1 = side == 0 ? a : b, s2 = side == 0 ? b : a;
       const Vec3* p2 = side == 0 ? pb : pa;
+      const Vec3 n2 = tri_n[s2];
       for (std::int64_t q = own_v_off[s1]; q < own_v_off[s1 + 1]; ++q) {
         const int A = own_v[q];
         if (same && tri_has(s2, A)) continue;
-        const PointFace pf = point_face(x[A], p2[0], p2[1], p2[2]);
+        const Vec3 xa = x[A];
+        const double s_est = dot(xa - p2[0], n2);
+        if (s_est > d_dem + tol || s_est < -pen - tol) continue;
+        const PointFace pf = point_face(xa, p2[0], p2[1], p2[2]);
         if (!pf.inside || !(pf.s < d_dem) || !(pf.s > -pen)) continue;
-        if (out && n < cap) {
-          ContactRecord& r = out[n];
-          r = ContactRecord{};
+        {
+          ContactRecord r;
           r.type = kPointFace;
           r.k1 = contact_key1(kPointFace, vgid[A]);
           r.k2 = static_cast<std::uint64_t>(s2);
@@ -117,8 +126,8 @@ struct ContactTopology {
           r.n1 = 1;
           r.body1 = side == 0 ? ba : bb;
           r.body2 = side == 0 ? bb : ba;
+          emit(r);
         }
-        ++n;
       }
     }
     // Edge-edge.
@@ -129,13 +138,15 @@ struct ContactTopology {
         const int e1 = swap ? eb : ea, e2 = swap ? ea : eb;
         const int a0 = edge_v[e1], a1 = edge_v[ne + e1], b0 = edge_v[e2], b1 = edge_v[ne + e2];
         if (same && (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1)) continue;
-        const EdgeEdge ee = edge_edge(x[a0], x[a1], x[b0], x[b1], edge_normal(e1), edge_normal(e2));
+        const Vec3 xa0 = x[a0], xa1 = x[a1], xb0 = x[b0], xb1 = x[b1];
+        const double reach = 0.5 * (norm(xa1 - xa0) + norm(xb1 - xb0)) + d_dem + tol;
+        if (norm2(0.5 * ((xa0 + xa1) - (xb0 + xb1))) > reach * reach) continue;
+        const EdgeEdge ee = edge_edge(xa0, xa1, xb0, xb1, edge_normal(e1), edge_normal(e2));
         // Edges have no face region to confirm a penetration: two skew edges merely passing
         // behind each other would read as a deep overlap. Accept |d| < D_DEM only.
         if (!ee.valid || !(ee.d < d_dem) || !(ee.d > -d_dem)) continue;
-        if (out && n < cap) {
-          ContactRecord& r = out[n];
-          r = ContactRecord{};
+        {
+          ContactRecord r;
           r.type = kEdgeEdge;
           r.k1 = contact_key1(kEdgeEdge, static_cast<std::uint64_t>(e1));
           r.k2 = static_cast<std::uint64_t>(e2);
@@ -152,13 +163,24 @@ struct ContactTopology {
           r.n1 = 2;
           r.body1 = swap ? bb : ba;
           r.body2 = swap ? ba : bb;
+          emit(r);
         }
-        ++n;
       }
-    return n;
   }
 };
 static_assert(std::is_trivially_copyable_v<ContactTopology>);
+
+// Appends a record through an atomic counter (ContactStage::narrow_phase): slot k = count++,
+// written when k < cap (the caller re-runs with a larger buffer when count ends above cap).
+struct AppendRecord {
+  ContactRecord* rec;
+  int* count;
+  std::int64_t cap;
+  QDEMSPH_HD void operator()(const ContactRecord& r) const {
+    const int k = atomic_inc(count);
+    if (k < cap) rec[k] = r;
+  }
+};
 
 // Whether this process counts a record's energy: it owns (index < n_free_vertices) the
 // record's free-body vertex with the smallest global id. Always on one process; on MPI ranks,
@@ -262,8 +284,7 @@ class ContactStage {
     pr_ref_.resize(np_);
     built_ = false;
     rebuilds_ = 0;
-    cnt_.resize(np_ + nwv_ + 1);
-    mismatch_.resize(1);
+    count_.resize(1);
     vcnt_.resize(nv_ + 1);
     vcur_.resize(nv_);
     n_prev_ = 0;
@@ -396,19 +417,16 @@ class ContactStage {
   double max_overlap_ever() const { return max_overlap_ever_; }
   std::int64_t steps() const { return steps_; }
   std::int64_t pair_rebuilds() const { return rebuilds_; }
-  // Items whose fill pass found a different number of contacts than their count pass (0
-  // expected; see narrow_phase). Reads one int back.
-  std::int64_t fill_mismatches() const { return read_back(mismatch_, 0); }
   std::size_t bytes() const {
     return tri_v_.bytes() + edge_v_.bytes() + edge_tri_.bytes() + tri_n_.bytes() + prim_v_.bytes() +
            tri_body_.bytes() + prim_body_.bytes() + own_v_off_.bytes() + own_e_off_.bytes() +
            own_v_.bytes() + own_e_.bytes() + prim_tri_off_.bytes() + prim_tri_.bytes() +
-           pc_.bytes() + pr_.bytes() + cnt_.bytes() + rec_.bytes() + ent_f_.bytes() +
-           ent_v_.bytes() + vcnt_.bytes() + vcur_.bytes() + vent_.bytes() + pact_.bytes() +
-           nact_.bytes() + pk1_.bytes() + pk2_.bytes() + pxi_.bytes() + nk1_.bytes() +
-           nk2_.bytes() + nxi_.bytes() + pen_.bytes() + pet_.bytes() + nen_.bytes() + net_.bytes() +
-           ediss_.bytes() + ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() +
-           pr_ref_.bytes() + cells_.bytes() + pairs_.bytes() + vgid_.bytes();
+           pc_.bytes() + pr_.bytes() + rec_.bytes() + ent_f_.bytes() + ent_v_.bytes() +
+           vcnt_.bytes() + vcur_.bytes() + vent_.bytes() + pact_.bytes() + nact_.bytes() +
+           pk1_.bytes() + pk2_.bytes() + pxi_.bytes() + nk1_.bytes() + nk2_.bytes() + nxi_.bytes() +
+           pen_.bytes() + pet_.bytes() + nen_.bytes() + net_.bytes() + ediss_.bytes() +
+           ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() + pr_ref_.bytes() +
+           cells_.bytes() + pairs_.bytes() + vgid_.bytes();
   }
 
   ContactTopology topology() const {
@@ -579,76 +597,52 @@ class ContactStage {
     const auto vb = vertex_body_.cview();
     const auto vg = vgid_.cview();
     const double d_dem = d_dem_;
-    // Each writes at most `cap` records to out (if not null) and returns how many it found.
-    auto prim_contacts =
-        QDEMSPH_LAMBDA(std::int64_t i, ContactRecord * out, std::int64_t cap)->std::int64_t {
-      std::int64_t n = 0;
-      for (std::int64_t q = ps[i]; q < ps[i + 1]; ++q) {
-        const int j = sec[q];
-        for (std::int64_t ta = pto[i]; ta < pto[i + 1]; ++ta)
-          for (std::int64_t tb = pto[j]; tb < pto[j + 1]; ++tb)
-            n += topo.narrow_tris(x, pt[ta], pt[tb], out && n < cap ? out + n : nullptr, cap - n);
-      }
-      return n;
-    };
-    auto wall_contacts =
-        QDEMSPH_LAMBDA(std::int64_t k, ContactRecord * out, std::int64_t cap)->std::int64_t {
-      const int A = wv[k];
-      const Vec3 xa = x[A];
-      std::int64_t n = 0;
-      for (std::int64_t w = 0; w < nw; ++w) {
-        const Vec3 p{wall[8 * w], wall[8 * w + 1], wall[8 * w + 2]};
-        const Vec3 nn{wall[8 * w + 3], wall[8 * w + 4], wall[8 * w + 5]};
-        const double s = dot(xa - p, nn);
-        if (!(s < d_dem)) continue;
-        if (out && n < cap) {
-          ContactRecord& r = out[n];
-          r = ContactRecord{};
-          r.type = kWall;
-          r.k1 = contact_key1(kWall, vg[A]);
-          r.k2 = static_cast<std::uint64_t>(w);
-          r.v[0] = A;
-          r.w[0] = 1;
-          r.n = nn;
-          r.d = s;
-          r.n1 = 1;
-          r.body1 = vb[A];
-          r.body2 = -1;
-          r.wall = static_cast<std::int32_t>(w);
-        }
-        ++n;
-      }
-      return n;
-    };
-    const auto cnt = cnt_.view();
-    for_each(
-        Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
-          cnt[i] = i < np ? prim_contacts(i, nullptr, 0) : wall_contacts(i - np, nullptr, 0);
-        });
-    const std::int64_t nc = exclusive_scan(Exec{}, cnt, np + nwv);
-    if (rec_.size() < nc) rec_.resize(nc + nc / 4 + 64);
+    // One pass over the candidate pairs and the wall vertices appends every contact through
+    // one atomic counter; the order of the appends does not matter, the records are sorted
+    // by their keys (unique per feature pair) next. Should the buffer be too small, the pass
+    // runs again with room for all (the count is exact: every contact was counted).
+    std::int64_t nc = 0;
+    for (int pass = 0; pass < 2; ++pass) {
+      count_.zero();
+      const AppendRecord app{rec_.view().p, count_.view().p, rec_.size()};
+      for_each(
+          Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
+            if (i < np) {
+              for (std::int64_t q = ps[i]; q < ps[i + 1]; ++q) {
+                const int j = sec[q];
+                for (std::int64_t ta = pto[i]; ta < pto[i + 1]; ++ta)
+                  for (std::int64_t tb = pto[j]; tb < pto[j + 1]; ++tb)
+                    topo.narrow_tris(x, pt[ta], pt[tb], app);
+              }
+              return;
+            }
+            const int A = wv[i - np];
+            const Vec3 xa = x[A];
+            for (std::int64_t w = 0; w < nw; ++w) {
+              const Vec3 p{wall[8 * w], wall[8 * w + 1], wall[8 * w + 2]};
+              const Vec3 nn{wall[8 * w + 3], wall[8 * w + 4], wall[8 * w + 5]};
+              const double s = dot(xa - p, nn);
+              if (!(s < d_dem)) continue;
+              ContactRecord r;
+              r.type = kWall;
+              r.k1 = contact_key1(kWall, vg[A]);
+              r.k2 = static_cast<std::uint64_t>(w);
+              r.v[0] = A;
+              r.w[0] = 1;
+              r.n = nn;
+              r.d = s;
+              r.n1 = 1;
+              r.body1 = vb[A];
+              r.body2 = -1;
+              r.wall = static_cast<std::int32_t>(w);
+              app(r);
+            }
+          });
+      nc = read_back(count_, 0);
+      if (nc <= rec_.size()) break;
+      rec_.resize(nc + nc / 4 + 64);
+    }
     const auto rec = rec_.view();
-    // The fill repeats the count's tests, so it finds the same records; should compiled code
-    // ever decide a threshold differently in the two passes (e.g. fused multiply-adds placed
-    // differently), it still writes only its slots, pads them with inactive records and counts
-    // the item in fill_mismatches (contact_stats): never a write into a neighbour's slots.
-    const auto mism = mismatch_.view();
-    for_each(
-        Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
-          ContactRecord* out = rec.p + cnt[i];
-          const std::int64_t cap = cnt[i + 1] - cnt[i];
-          const std::int64_t n =
-              i < np ? prim_contacts(i, out, cap) : wall_contacts(i - np, out, cap);
-          if (n == cap) return;
-          atomic_inc(&mism[0]);
-          for (std::int64_t k = n; k < cap; ++k) {
-            out[k] = ContactRecord{};
-            out[k].k1 = ~std::uint64_t{0};
-            out[k].k2 = static_cast<std::uint64_t>(cnt[i] + k);
-            out[k].type = kWall;
-            out[k].active = 0;
-          }
-        });
     sort_records(Exec{}, rec, nc);
     // One vertex touching one body: keep the point-face hit with the largest gap.
     for_each(
@@ -917,14 +911,14 @@ class ContactStage {
   Buffer<std::int32_t> tri_v_{S}, edge_v_{S}, prim_v_{S}, tri_body_{S}, prim_body_{S}, own_v_{S},
       own_e_{S}, prim_tri_{S}, wall_v_{S}, body_fixed_{S}, body_mat_{S}, vertex_body_{S};
   Buffer<std::uint64_t> vgid_{S};
-  Buffer<std::int64_t> own_v_off_{S}, own_e_off_{S}, prim_tri_off_{S}, cnt_{S};
+  Buffer<std::int64_t> own_v_off_{S}, own_e_off_{S}, prim_tri_off_{S};
   Buffer<double> body_h_{S}, pair_mu_{S}, pair_zeta_{S}, pair_kn_{S}, pair_E_{S}, wall_{S},
       wall_kn_{S}, inv_mass_{S}, pr_{S};
   Vec3Buffer pc_{S};
   CellList<Exec> cells_;
   CandidatePairs<Exec> pairs_;
   Buffer<ContactRecord> rec_{S};
-  Buffer<int> ent_v_{S}, vcnt_{S}, vcur_{S}, vent_{S}, mismatch_{S};
+  Buffer<int> ent_v_{S}, vcnt_{S}, vcur_{S}, vent_{S}, count_{S};
   Vec3Buffer ent_f_{S};
   Buffer<std::uint64_t> pk1_{S}, pk2_{S}, nk1_{S}, nk2_{S};
   Buffer<int> pact_{S}, nact_{S};

@@ -27,7 +27,8 @@ struct StaticStats {
 };
 
 // The smallest current stability limit of a free tet (physics/element.hpp, tet_critical_dt
-// at the deformed shape) and that tet (-1: no free tet).
+// at the deformed shape) and, when asked to locate it, that tet (else -1; -1 and dt = 0:
+// no free tet).
 struct CriticalTet {
   double dt = 0;
   std::int64_t tet = -1;
@@ -88,7 +89,7 @@ class Backend {
   virtual std::int64_t take_inverted_tet() = 0;
   // The first contact found deeper than its bound since the last call (clears it), if any.
   virtual std::optional<DeepContact> take_deep_contact() = 0;
-  virtual CriticalTet critical_tet() = 0;
+  virtual CriticalTet critical_tet(bool locate) = 0;
   virtual HostFields download(bool with_stress) = 0;
   // The state between steps (BackendState): load_state after upload (and after the
   // Stepper's first force evaluation, which would overwrite f) restores a saved state

@@ -172,8 +172,7 @@ class QdemBackend final : public Backend {
             {"active", static_cast<double>(c.active)},
             {"max_overlap", c.max_overlap},
             {"max_overlap_ever", contact_->max_overlap_ever()},
-            {"pair_rebuilds", static_cast<double>(contact_->pair_rebuilds())},
-            {"fill_mismatches", static_cast<double>(contact_->fill_mismatches())}};
+            {"pair_rebuilds", static_cast<double>(contact_->pair_rebuilds())}};
   }
 
   SolidViews solid_views() override {
@@ -319,13 +318,14 @@ class QdemBackend final : public Backend {
     return contact_->take_deep_contact();
   }
 
-  // Two reductions over the free tets at their current shape: the largest 1 / dt_critical,
-  // then the smallest index reaching it (same arithmetic, so the comparison is exact).
-  CriticalTet critical_tet() override {
+  // A reduction over the free tets at their current shape: the largest 1 / dt_critical;
+  // locate: a second one for the smallest index reaching it (same arithmetic: exact).
+  CriticalTet critical_tet(bool locate) override {
     if (nft_ == 0) return {};
     const CriticalRate rate{x_.cview(), tv_.cview(), tmat_.cview(), mats_.cview(), nt_};
     const double rmax = reduce_max(
         Exec{}, nft_, QDEMSPH_LAMBDA(std::int64_t t) { return rate(t); }, 0.0);
+    if (!locate) return {1.0 / rmax, -1};
     const double none = -static_cast<double>(nt_);
     const double first = reduce_max(
         Exec{}, nft_,

@@ -104,9 +104,10 @@ void Stepper::check(bool dynamic) const {
         n_, t_, model_.bodies[c->body1].name, other, c->depth, c->bound,
         describe_vertex(model_, c->vertex)));
   }
-  if (dynamic) {
+  if (dynamic && n_ % (kDtGuardChecks * check_every_) == 0) {
     const double h = dt_ / substeps_;
-    const CriticalTet ct = be_.critical_tet();
+    CriticalTet ct = be_.critical_tet(false);
+    if (ct.dt > 0 && h > ct.dt) ct = be_.critical_tet(true);
     if (ct.tet >= 0 && h > ct.dt)
       throw SimulationError(fmt::format(
           "step {} (t = {:.6e} s): the time step {:.3e} s exceeds the stability limit {:.3e} s "

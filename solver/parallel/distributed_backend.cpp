@@ -286,14 +286,16 @@ class DistributedImpl final : public DistributedBackend {
         all[1]};
   }
 
-  // The smallest limit over the ranks' held tets; its tet by global id (the smallest).
-  CriticalTet critical_tet() override {
-    const CriticalTet c = local_->critical_tet();
-    const double dt = c.tet >= 0 ? c.dt : std::numeric_limits<double>::infinity();
+  // The smallest limit over the ranks' held tets; located: its tet by global id (the
+  // smallest).
+  CriticalTet critical_tet(bool locate) override {
+    const CriticalTet c = local_->critical_tet(locate);
+    const double dt = c.dt > 0 ? c.dt : std::numeric_limits<double>::infinity();
     double dmin = 0;
     MPI_Allreduce(&dt, &dmin, 1, MPI_DOUBLE, MPI_MIN, comm_);
-    const std::int64_t t = min_over_ranks(c.tet >= 0 && dt == dmin ? L_.tets[c.tet] : -1);
-    return t < 0 ? CriticalTet{} : CriticalTet{dmin, t};
+    if (!(dmin < std::numeric_limits<double>::infinity())) return {};
+    if (!locate) return {dmin, -1};
+    return {dmin, min_over_ranks(c.tet >= 0 && dt == dmin ? L_.tets[c.tet] : -1)};
   }
 
   // Global fields on rank 0: free vertices and tets from their owners / home ranks, fixed

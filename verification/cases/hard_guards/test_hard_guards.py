@@ -1,8 +1,8 @@
 """Hard case: failure paths of `qdemsph run`.
 
 1. Run-time guards, each on a scene made to trip it: a cube crushed fast by a prescribed
-   velocity (20 m/s: a tet inverts within the first check interval), the same cube crushed at 10 m/s (its
-   top tets get thinner until the step exceeds their stability limit, before any inverts), a
+   velocity (20 m/s: a tet inverts within the first check interval), the same cube crushed at 0.5 m/s
+   (its top tets get thinner until the step exceeds their stability limit, before any inverts), a
    cube sinking into a block through a far too soft contact (penetration bound), a block of
    water falling faster than its sound speed allows (fluid step limit). Expected for each:
    exit code 4, the guard's message naming the element / bodies / particle, step and time on
@@ -27,16 +27,19 @@ GUARDS = {
                      ["inverted", "body 'cube'"], (1e-4, 0.005),
                      "20 m/s: the top reaches the clamp at t = 5 ms; a tet inverts (top past the "
                      "middle nodes, 2.5 ms) before the first check (step 10, 3.4 ms) can see thin tets"),
-    "stability_limit": ("scene_crush.yaml", [], ["exceeds the stability limit", "of tet", "body 'cube'"],
-                        (1e-4, 0.01), "10 m/s: thinner top tets lower the limit below dt before the "
-                        "top reaches the clamp at t = 10 ms"),
+    "stability_limit": ("scene_crush.yaml", ["constraints.1.velocity=[0,0,-0.5]", "run.end_time=0.1"],
+                        ["exceeds the stability limit", "of tet", "body 'cube'"], (0.035, 0.08),
+                        "0.5 m/s: the limit (checked every 100 steps, 34 ms) falls below dt = 0.5 x the "
+                        "initial one after the first check and before the top has moved 40 mm (80 ms; at "
+                        "0.3 m/s a tet inverts after 29 mm)"),
     "penetration": ("scene_penetration.yaml", [],
                     ["contact.max_penetration", "body 'cube' and body 'block'", "vertex"], (4e-4, 0.02),
                     "5 m/s: the surfaces meet at 0.4 ms (2 mm gap); the bound (12.5 mm) is crossed "
                     "before the cube has sunk 0.1 m (20 ms)"),
-    "fluid_dt": ("scene_fluid_fall.yaml", [], ["fluid step", "SPH particle"], (0.25, 0.30),
+    "fluid_dt": ("scene_fluid_fall.yaml", [], ["fluid step", "SPH particle"], (0.25, 0.46),
                  "free fall passes 2 (c0 + sqrt(2 g H)) - c0 = 2.77 m/s at t = 0.28 s (the block "
-                 "also spreads, so its fastest particle a little sooner)"),
+                 "also spreads, so its fastest particle a little sooner); the limits are checked every "
+                 "100 steps (0.17 s)"),
 }
 
 
