@@ -59,6 +59,9 @@ run chain20_dt2x   shogi_chain.py --n 20 --mu 0.5 --dt 4e-5 --young 1e7 --tag _d
 # 16x stiffness (young 1.6e8, dt 1e-5), the same push as the 4x run and as qdemsph's chain
 # (verification/cases/yade_shogi_chain): does the front keep slowing with stiffer contact?
 run chain20_stiff16 shogi_chain.py --n 20 --mu 0.5 --dt 1e-5 --young 1.6e8 --omega0 12 --tag _stiff16
+# Friction 0.3 at the dt2x run's settings: how much the front speeds up in YADE (qdemsph: +37 %
+# from mu 0.5 to a piece-piece mu 0.3, references/benchmarks/gpu/2026-11-25_h100_chain.json).
+run chain20_mu03   shogi_chain.py --n 20 --mu 0.3 --dt 4e-5 --young 1e7 --tag _mu03_dt2x
 
 $PY convergence.py "$OUT"
 echo "logs in $LOGDIR"

@@ -1,10 +1,11 @@
 """Tilts, fall times and front speed of a yade_shogi_chain run (used by the test; run by
 hand to read a run made outside pytest, also one still in progress):
 
-    HDF5_USE_FILE_LOCKING=FALSE /usr/bin/python3 chain_analysis.py OUTPUT_DIR
+    HDF5_USE_FILE_LOCKING=FALSE /usr/bin/python3 chain_analysis.py OUTPUT_DIR... [--json F]
 
-prints the simulated time reached, each piece's fall time (tilt 45 deg), the front speeds
-over YADE's windows and YADE's values."""
+prints for each run the simulated time reached, each piece's fall time (tilt 45 deg), the
+front speeds over YADE's windows and YADE's values; --json writes them as records."""
+import argparse
 import json
 import math
 import sys
@@ -27,7 +28,7 @@ def front_speed(fall, pitch, lo, hi):
     """Least-squares slope of the base positions i * pitch against the fall times, pieces
     lo..hi (YADE's definition); None if one of them did not fall."""
     idx = list(range(lo, hi + 1))
-    if any(fall[i] is None for i in idx):
+    if hi >= len(fall) or any(fall[i] is None for i in idx):
         return None
     return float(np.polyfit([fall[i] for i in idx], [i * pitch for i in idx], 1)[0])
 
@@ -41,7 +42,7 @@ def chain_tilts(out):
         body = np.asarray(f["mesh/body"])
     d = np.atleast_1d(np.genfromtxt(out / "probes.csv", delimiter=",", names=True))
     tilts = []
-    for b in range(make_yade_chain.N):
+    for b in range(int(body.max()) + 1):  # every piece of the run (YADE's 20-piece variants too)
         q = p0[body == b]
         top0 = q[q[:, 2] >= make_yade_chain.TOP_Z].mean(0)
         com = np.stack([d[f"p{b:02d}_{k}"] for k in "xyz"], 1)
@@ -52,22 +53,41 @@ def chain_tilts(out):
     return d["time"], np.array(tilts)
 
 
-def main(out):
-    t, tilts = chain_tilts(Path(out))
+def analyse(out):
+    """One run's record: sizes and cost from summary.json, fall times, front speeds over
+    YADE's windows (those every piece of the run covers) with YADE's values."""
+    t, tilts = chain_tilts(out)
     fall = [crossing(t, a, FRONT_TILT) for a in tilts]
-    print(f"t = {t[-1]:.4f} s, fallen {sum(f is not None for f in fall)} of {len(fall)}")
-    print("fall times (s):", " ".join("-" if f is None else f"{f:.4f}" for f in fall))
+    s = json.loads((out / "summary.json").read_text()) if (out / "summary.json").exists() else {}
     base = json.loads((YADE / "shogi_chain_n40.provenance.json").read_text())["results"]["fall_time_s"]
-    for lo, hi in ((10, 38), (5, 18), (5, 35)):
-        q = front_speed(fall, make_yade_chain.PITCH, lo, hi)
-        y = front_speed(base, make_yade_chain.PITCH, lo, hi)
-        print(f"front speed, pieces {lo}..{hi}: qdemsph {'-' if q is None else f'{q:.4f}'} m/s, YADE n40 {y:.4f} m/s")
     last = max((i for i, f in enumerate(fall) if f is not None), default=-1)
-    if 5 < last < 38:  # a run in progress: the front so far
-        q = front_speed(fall, make_yade_chain.PITCH, 5, last)
-        y = front_speed(base, make_yade_chain.PITCH, 5, last)
-        print(f"front speed so far, pieces 5..{last}: qdemsph {q:.4f} m/s, YADE n40 {y:.4f} m/s")
+    windows = [(10, 38), (5, 18), (5, 35)] + ([(5, last)] if 5 < last < 38 else [])
+    speeds = {}
+    for lo, hi in windows:
+        q = front_speed(fall, make_yade_chain.PITCH, lo, hi)
+        if q is not None:
+            speeds[f"{lo}..{hi}"] = {"qdemsph": q, "yade_n40": front_speed(base, make_yade_chain.PITCH, lo, hi)}
+    return {"run": out.name, "t_reached": float(t[-1]), "pieces": len(fall),
+            "fallen": sum(f is not None for f in fall), "fall_time_s": fall, "front_speed_m_s": speeds,
+            **{k: s.get(k) for k in ("status", "backend", "n_tets", "dt", "steps", "wall_s")}}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("runs", nargs="+", type=Path, help="qdemsph output folders (finished or in progress)")
+    ap.add_argument("--json", type=Path, help="write the records (a list) here")
+    a = ap.parse_args()
+    recs = []
+    for out in a.runs:
+        r = analyse(out)
+        recs.append(r)
+        print(f"{r['run']}: t = {r['t_reached']:.4f} s, fallen {r['fallen']} of {r['pieces']}")
+        print("  fall times (s):", " ".join("-" if f is None else f"{f:.4f}" for f in r["fall_time_s"]))
+        for w, v in r["front_speed_m_s"].items():
+            print(f"  front speed, pieces {w}: qdemsph {v['qdemsph']:.4f} m/s, YADE n40 {v['yade_n40']:.4f} m/s")
+    if a.json:
+        a.json.write_text(json.dumps(recs, indent=1) + "\n")
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    main()

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# The 40-piece shogi chain (verification/cases/yade_shogi_chain) and 20-piece variants on one
+# GPU, all at once (MPS when it starts): mesh refinement, 4 x stiffer bodies, piece-piece
+# friction 0.3. Two stages, since the GPU machines have no gmsh:
+#   ci/gpu/chain_runs.sh prepare DIR               here: premeshed scenes (ci/gpu/premesh.py)
+#   DIR/../chain_runs.sh run DIR PACK OUT [LIMIT_S] there: runs, then one .tgz per variant in OUT
+#   ci/gpu/chain_runs.sh analyse OUT RECORD.json   here: fall times and front speeds, one record
+# (records of 2026-11-25: references/benchmarks/gpu/2026-11-25_h100_chain.json).
+set -euo pipefail
+ROOT=$(cd "$(dirname "$0")/../.." && pwd)
+CASE=$ROOT/verification/cases/yade_shogi_chain
+# name  pieces  mesh_size  end_time  run-time overrides
+VARIANTS="c40 40 0.006 3.6 -
+c20_E4 20 0.006 1.9 materials.boxwood.E=2e7
+c20_mu03 20 0.006 1.9 contact.mu=0.3
+f20_4 20 0.004 1.9 -
+f20_3 20 0.003 1.9 -"
+case ${1:?prepare, run or analyse} in
+prepare)
+  DIR=${2:?DIR}; mkdir -p "$DIR"; cp "$0" "$DIR/../chain_runs.sh"
+  while read -r name n h end sets; do
+    /usr/bin/python3 "$CASE/make_yade_chain.py" --n "$n" --mesh-size "$h" --end-time "$end" --out "$DIR/$name.yaml"
+    /usr/bin/python3 "$ROOT/ci/gpu/premesh.py" "$ROOT/build/bin/qdemsph" "$DIR/$name.yaml" "$DIR/$name" >/dev/null
+    echo "$sets" >"$DIR/$name/sets"
+  done <<<"$VARIANTS" ;;
+run)
+  DIR=$(cd "${2:?DIR}" && pwd); PACK=$(cd "${3:?PACK}" && pwd); OUT=${4:?OUT}; LIMIT=${5:-540}
+  export LD_LIBRARY_PATH=$PACK/lib
+  nvidia-cuda-mps-control -d && echo "MPS on" || echo "no MPS"
+  for d in "$DIR"/*/; do
+    name=$(basename "$d"); sets=(); for s in $(cat "$d/sets"); do [ "$s" = - ] || sets+=(--set "$s"); done
+    (cd "$d" && timeout "$LIMIT" "$PACK/bin/qdemsph" run scene.yaml -q -b cuda -o "/tmp/chain/$name" "${sets[@]}" \
+       >"/tmp/chain_$name.log" 2>&1; echo "$name rc=$?") &
+  done
+  wait
+  for d in "$DIR"/*/; do
+    name=$(basename "$d"); cp "/tmp/chain_$name.log" "/tmp/chain/$name/run.log"
+    tar czf "$OUT/$name.tgz" -C /tmp/chain "$name/probes.csv" "$name/summary.json" "$name/fields.h5" "$name/run.log"
+  done ;;
+analyse)
+  OUT=${2:?OUT}; REC=${3:?RECORD.json}; T=$(mktemp -d)
+  for f in "$OUT"/*.tgz; do tar xzf "$f" -C "$T"; done
+  /usr/bin/python3 "$CASE/chain_analysis.py" "$T"/* --json "$REC"
+  rm -rf "$T" ;;
+esac
