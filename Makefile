@@ -1,6 +1,7 @@
 # What people type. Each target installs missing Debian packages and builds what it needs.
 #   make            build build/bin/qdemsph (CPU + CUDA backend when nvcc is present)
 #   make run        the demo: a viscoelastic cantilever released from a deflected state
+#   make run-fsi    a fluid-structure demo (SCENE=dambreak_cubes|debris_flow, RUN_ARGS=...)
 #   make test       unit tests + the quick tier of the verification suite
 #   make verify     the verification suite (FULL=1: the long tier)
 #   make references regenerate the stored FEniCSx and YADE reference results
@@ -11,7 +12,7 @@ JOBS ?= $(shell nproc)
 PY := /usr/bin/python3
 FULL ?= 0
 
-.PHONY: all deps build run test unit verify references sanitize fuzz clean
+.PHONY: all deps build run run-fsi test unit verify references sanitize fuzz clean
 all: build
 
 deps:
@@ -23,6 +24,9 @@ build: deps
 
 run: build
 	@bash ci/demo.sh $(BUILD)
+
+run-fsi: build
+	@bash ci/demo_fsi.sh $(BUILD) $(or $(SCENE),dambreak_cubes) $(RUN_ARGS)
 
 unit: build
 	@cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
