@@ -26,16 +26,18 @@ prepare)
 run)
   DIR=$(cd "${2:?DIR}" && pwd); PACK=$(cd "${3:?PACK}" && pwd); OUT=${4:?OUT}; LIMIT=${5:-540}
   export LD_LIBRARY_PATH=$PACK/lib
-  nvidia-cuda-mps-control -d && echo "MPS on" || echo "no MPS"
+  nvidia-cuda-mps-control -d 2>/dev/null || true  # (an error when it already runs)
+  pgrep -f nvidia-cuda-mps-control >/dev/null && echo "MPS on" || echo "no MPS"
   for d in "$DIR"/*/; do
     name=$(basename "$d"); sets=(); for s in $(cat "$d/sets"); do [ "$s" = - ] || sets+=(--set "$s"); done
-    (cd "$d" && timeout "$LIMIT" "$PACK/bin/qdemsph" run scene.yaml -q -b cuda -o "/tmp/chain/$name" "${sets[@]}" \
-       >"/tmp/chain_$name.log" 2>&1; echo "$name rc=$?") &
+    (cd "$d" && rc=0 && timeout "$LIMIT" "$PACK/bin/qdemsph" run scene.yaml -q -b cuda -o "/tmp/chain/$name" \
+       "${sets[@]}" >"/tmp/chain_$name.log" 2>&1 || rc=$?; echo "$name rc=$rc") &
   done
   wait
-  for d in "$DIR"/*/; do
+  for d in "$DIR"/*/; do  # a run stopped by LIMIT has no summary.json: what it wrote comes back
     name=$(basename "$d"); cp "/tmp/chain_$name.log" "/tmp/chain/$name/run.log"
-    tar czf "$OUT/$name.tgz" -C /tmp/chain "$name/probes.csv" "$name/summary.json" "$name/fields.h5" "$name/run.log"
+    files=(); for f in probes.csv summary.json fields.h5 run.log; do [ -f "/tmp/chain/$name/$f" ] && files+=("$name/$f"); done
+    tar czf "$OUT/$name.tgz" -C /tmp/chain "${files[@]}"
   done ;;
 analyse)
   OUT=${2:?OUT}; REC=${3:?RECORD.json}; T=$(mktemp -d)
