@@ -110,24 +110,22 @@ struct ContactTopology {
         if (s_est > d_dem + tol || s_est < -pen - tol) continue;
         const PointFace pf = point_face(xa, p2[0], p2[1], p2[2]);
         if (!pf.inside || !(pf.s < d_dem) || !(pf.s > -pen)) continue;
-        {
-          ContactRecord r;
-          r.type = kPointFace;
-          r.k1 = contact_key1(kPointFace, vgid[A]);
-          r.k2 = static_cast<std::uint64_t>(s2);
-          r.v[0] = A;
-          r.w[0] = 1;
-          for (int k = 0; k < 3; ++k) {
-            r.v[k + 1] = tri_vertex(s2, k);
-            r.w[k + 1] = pf.w[k];
-          }
-          r.n = pf.n;
-          r.d = pf.s;
-          r.n1 = 1;
-          r.body1 = side == 0 ? ba : bb;
-          r.body2 = side == 0 ? bb : ba;
-          emit(r);
+        ContactRecord r;
+        r.type = kPointFace;
+        r.k1 = contact_key1(kPointFace, vgid[A]);
+        r.k2 = static_cast<std::uint64_t>(s2);
+        r.v[0] = A;
+        r.w[0] = 1;
+        for (int k = 0; k < 3; ++k) {
+          r.v[k + 1] = tri_vertex(s2, k);
+          r.w[k + 1] = pf.w[k];
         }
+        r.n = pf.n;
+        r.d = pf.s;
+        r.n1 = 1;
+        r.body1 = side == 0 ? ba : bb;
+        r.body2 = side == 0 ? bb : ba;
+        emit(r);
       }
     }
     // Edge-edge.
@@ -145,26 +143,24 @@ struct ContactTopology {
         // Edges have no face region to confirm a penetration: two skew edges merely passing
         // behind each other would read as a deep overlap. Accept |d| < D_DEM only.
         if (!ee.valid || !(ee.d < d_dem) || !(ee.d > -d_dem)) continue;
-        {
-          ContactRecord r;
-          r.type = kEdgeEdge;
-          r.k1 = contact_key1(kEdgeEdge, static_cast<std::uint64_t>(e1));
-          r.k2 = static_cast<std::uint64_t>(e2);
-          r.v[0] = a0;
-          r.v[1] = a1;
-          r.v[2] = b0;
-          r.v[3] = b1;
-          r.w[0] = 1 - ee.s;
-          r.w[1] = ee.s;
-          r.w[2] = 1 - ee.t;
-          r.w[3] = ee.t;
-          r.n = ee.n;
-          r.d = ee.d;
-          r.n1 = 2;
-          r.body1 = swap ? bb : ba;
-          r.body2 = swap ? ba : bb;
-          emit(r);
-        }
+        ContactRecord r;
+        r.type = kEdgeEdge;
+        r.k1 = contact_key1(kEdgeEdge, static_cast<std::uint64_t>(e1));
+        r.k2 = static_cast<std::uint64_t>(e2);
+        r.v[0] = a0;
+        r.v[1] = a1;
+        r.v[2] = b0;
+        r.v[3] = b1;
+        r.w[0] = 1 - ee.s;
+        r.w[1] = ee.s;
+        r.w[2] = 1 - ee.t;
+        r.w[3] = ee.t;
+        r.n = ee.n;
+        r.d = ee.d;
+        r.n1 = 2;
+        r.body1 = swap ? bb : ba;
+        r.body2 = swap ? ba : bb;
+        emit(r);
       }
   }
 };
