@@ -7,14 +7,18 @@ from pathlib import Path
 import numpy as np
 
 
-def fluid_frames(out):
+def fluid_frames(out, most=None):
     """List of dicts {time, x (N,3), v (N,3), p (N), rho (N), type (N), id (N)}, fluid and wall
-    particles, in file order."""
+    particles, in file order. most: only up to that many frames, spread evenly over the run
+    (first and last included), the others not read (pictures of large runs)."""
     import h5py
 
     frames = []
     with h5py.File(Path(out) / "fluid.h5", "r") as f:
-        for k in sorted(f["steps"].keys()):
+        keys = sorted(f["steps"].keys())
+        if most is not None:
+            keys = [keys[i] for i in np.unique(np.linspace(0, len(keys) - 1, min(most, len(keys))).round().astype(int))]
+        for k in keys:
             s = f["steps"][k]
             frames.append({"time": float(s.attrs["time"]), "x": s["position"][:], "v": s["velocity"][:],
                            "p": s["pressure"][:], "rho": s["density"][:], "type": s["type"][:],

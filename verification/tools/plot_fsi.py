@@ -29,20 +29,13 @@ import numpy as np  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # verification/
-from harness.sph import fluid_csv  # noqa: E402
+from harness.sph import fluid_csv, fluid_frames  # noqa: E402
 from tools.plot_run import read_probes, title_of  # noqa: E402
 
 AXES = "xyz"
 FLUID_CMAP = matplotlib.colors.LinearSegmentedColormap.from_list(
     "water", plt.get_cmap("Blues")(np.linspace(0.35, 1.0, 256)))
 BODY_CMAP = "YlOrRd"
-
-
-def read_fluid_frame(f, key):
-    """One frame of fluid.h5: {time, x, v, type} (fluid, wall and body-marker particles)."""
-    s = f["steps"][key]
-    return {"time": float(s.attrs["time"]), "x": s["position"][...], "v": s["velocity"][...],
-            "type": s["type"][...]}
 
 
 def surface_faces(tets):
@@ -70,11 +63,6 @@ def body_names(run, n):
     return [f"body {k}" for k in range(n)]
 
 
-def pick(n, k):
-    """Up to k indices spread evenly over range(n), first and last included."""
-    return np.unique(np.linspace(0, n - 1, min(k, n)).round().astype(int))
-
-
 def choose_axes(first, last, up, view):
     """(horizontal, vertical, depth) axes of the picture. Side view: the up axis vertical, the
     horizontal axis the one along which the fluid spread most; top view: looking down."""
@@ -89,9 +77,7 @@ def choose_axes(first, last, up, view):
 
 
 def plot_frames(run, n_frames, up, view):
-    with h5py.File(run / "fluid.h5", "r") as ff:
-        keys = sorted(ff["steps"].keys())
-        frames = [read_fluid_frame(ff, keys[i]) for i in pick(len(keys), n_frames)]
+    frames = fluid_frames(run, most=n_frames)
     bodies = []
     with h5py.File(run / "fields.h5", "r") as fb:
         tets = fb["/mesh/tets"][...]

@@ -17,14 +17,12 @@ from harness.sph import fluid_frames  # noqa: E402
 def main():
     out = Path(sys.argv[1])
     png = Path(sys.argv[2]) if len(sys.argv) > 2 else out / "fluid_frames.png"
-    frames = fluid_frames(out)
-    pick = np.unique(np.linspace(0, len(frames) - 1, min(6, len(frames))).round().astype(int))
-    cols = 3 if len(pick) > 3 else len(pick)
-    rows = int(np.ceil(len(pick) / cols))
+    frames = fluid_frames(out, most=6)
+    cols = 3 if len(frames) > 3 else len(frames)
+    rows = int(np.ceil(len(frames) / cols))
     fig, axes = plt.subplots(rows, cols, figsize=(5 * cols, 3.2 * rows), squeeze=False)
     pmax = max(np.percentile(f["p"][f["type"] == 0], 99) for f in frames)
-    for ax, k in zip(axes.flat, pick):
-        f = frames[k]
+    for ax, f in zip(axes.flat, frames):
         fl, w = f["type"] == 0, f["type"] == 1
         zw = f["x"][w, 2]
         back = w & (f["x"][:, 2] <= np.percentile(zw, 30))  # one z layer of the walls, not all
@@ -34,7 +32,7 @@ def main():
         ax.set_aspect("equal")
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
-    for ax in list(axes.flat)[len(pick):]:
+    for ax in list(axes.flat)[len(frames):]:
         ax.axis("off")
     fig.colorbar(sc, ax=axes, label="pressure (Pa)", shrink=0.8)
     fig.savefig(png, dpi=110)

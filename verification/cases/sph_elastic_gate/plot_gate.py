@@ -20,15 +20,13 @@ from test_sph_elastic_gate import EXP_T, EXP_X, EXP_Y  # noqa: E402
 def main():
     out = Path(sys.argv[1])
     png = Path(sys.argv[2]) if len(sys.argv) > 2 else out / "gate_frames.png"
-    frames = fluid_frames(out)
-    pick = np.unique(np.linspace(0, len(frames) - 1, min(6, len(frames))).round().astype(int))
+    frames = fluid_frames(out, most=6)
     fig = plt.figure(figsize=(15, 8.5))
     gs = fig.add_gridspec(3, 3)
     pmax = max(np.percentile(f["p"][f["type"] == 0], 99) for f in frames)
     sc = None
-    for n, k in enumerate(pick):
+    for n, f in enumerate(frames):
         ax = fig.add_subplot(gs[n // 3, n % 3])
-        f = frames[k]
         x, typ = f["x"], f["type"]
         w = (typ == 1) & (x[:, 2] <= np.percentile(x[typ == 1, 2], 30))  # walls: one z side
         ax.scatter(x[w, 0], x[w, 1], s=1, c="0.8", lw=0)
