@@ -47,10 +47,12 @@ struct MeshSpec {
   double scale = 1.0;          // gmsh: coordinates multiplied by this
   Vec3 translate{0, 0, 0};     // gmsh: added after scaling; shogi: after rotating
   // shogi: a piece of the preset `piece` (king, rook, gold, knight, lance, pawn), target edge
-  // length mesh_size (0: about 2,500 tets), rotated by `rotate_angle` degrees about
-  // `rotate_axis` through the base centre, then translated.
+  // length mesh_size (0: about 2,500 tets), rotated about the axis through the base centre,
+  // then translated.
   std::string piece = "king";
   double mesh_size = 0;
+  // box and shogi: rotation by `rotate_angle` degrees about `rotate_axis` (right-handed)
+  // through the box's origin corner or the piece's base centre.
   Vec3 rotate_axis{1, 0, 0};
   double rotate_angle = 0;
 };

@@ -394,6 +394,15 @@ MaterialSpec parse_material(const Context& ctx, const std::string& name, const F
   return mat;
 }
 
+// `rotate: {axis, angle}` of a box or shogi mesh (degrees, right-handed).
+void parse_rotate(const Context& ctx, const Field& f, MeshSpec& mesh) {
+  const MapView r(ctx, f, {"axis", "angle"});
+  const Field axis = r.req("axis");
+  mesh.rotate_axis = axis.vec3();
+  if (!(norm(mesh.rotate_axis) > 0)) axis.fail("must not be the zero vector");
+  mesh.rotate_angle = r.req("angle").number();
+}
+
 MeshSpec parse_mesh(const Context& ctx, const Field& f) {
   if (!f.node().IsMap()) f.fail("expected a mapping of keys to values");
   const Field type(ctx, f.node()["type"], f.path() + ".type");
@@ -409,16 +418,11 @@ MeshSpec parse_mesh(const Context& ctx, const Field& f) {
           v->choice({"king", "rook", "bishop", "gold", "silver", "knight", "lance", "pawn"});
     if (auto v = m.opt("mesh_size")) mesh.mesh_size = v->number(positive, "must be > 0");
     if (auto v = m.opt("translate")) mesh.translate = v->vec3();
-    if (auto v = m.opt("rotate")) {
-      const MapView r(ctx, *v, {"axis", "angle"});
-      const Field axis = r.req("axis");
-      mesh.rotate_axis = axis.vec3();
-      if (!(norm(mesh.rotate_axis) > 0)) axis.fail("must not be the zero vector");
-      mesh.rotate_angle = r.req("angle").number();
-    }
+    if (auto v = m.opt("rotate")) parse_rotate(ctx, *v, mesh);
   } else if (kind == "box") {
-    const MapView m(ctx, f, {"type", "origin", "size", "cells"});
+    const MapView m(ctx, f, {"type", "origin", "size", "cells", "rotate"});
     mesh.kind = MeshSpec::Kind::Box;
+    if (auto v = m.opt("rotate")) parse_rotate(ctx, *v, mesh);
     if (auto v = m.opt("origin")) mesh.origin = v->vec3();
     const Field size = m.req("size");
     mesh.size = size.vec3();

@@ -26,16 +26,26 @@ ShogiSize shogi_preset(const std::string& piece) {
   return ShogiSize::king();
 }
 
+// Rodrigues rotation of the mesh about the spec's axis through `pivot`, then `shift` added.
+void rotate_mesh(TetMesh& m, const MeshSpec& spec, Vec3 pivot, Vec3 shift) {
+  const Vec3 k = spec.rotate_axis / norm(spec.rotate_axis);
+  const double a = spec.rotate_angle * 3.14159265358979323846 / 180.0;
+  const double c = std::cos(a), sn = std::sin(a);
+  for (auto& p : m.points) {
+    const Vec3 r = p - pivot;
+    p = pivot + c * r + sn * cross(k, r) + ((1 - c) * dot(k, r)) * k + shift;
+  }
+}
+
 TetMesh make_body_mesh(const BodySpec& b) {
-  if (b.mesh.kind == MeshSpec::Kind::Box) return make_box(b.mesh.origin, b.mesh.size, b.mesh.cells);
+  if (b.mesh.kind == MeshSpec::Kind::Box) {
+    TetMesh m = make_box(b.mesh.origin, b.mesh.size, b.mesh.cells);
+    if (b.mesh.rotate_angle != 0) rotate_mesh(m, b.mesh, b.mesh.origin, Vec3{});
+    return m;
+  }
   if (b.mesh.kind == MeshSpec::Kind::Shogi) {
     TetMesh m = make_shogi_piece(shogi_preset(b.mesh.piece), b.mesh.mesh_size);
-    // Rodrigues rotation about the axis through the base centre, then the translation.
-    const Vec3 k = b.mesh.rotate_axis / norm(b.mesh.rotate_axis);
-    const double a = b.mesh.rotate_angle * 3.14159265358979323846 / 180.0;
-    const double c = std::cos(a), sn = std::sin(a);
-    for (auto& p : m.points)
-      p = c * p + sn * cross(k, p) + ((1 - c) * dot(k, p)) * k + b.mesh.translate;
+    rotate_mesh(m, b.mesh, Vec3{}, b.mesh.translate);
     return m;
   }
   TetMesh m = read_gmsh(b.mesh.file);

@@ -120,7 +120,6 @@ class SphStage final : public FluidStage {
     const std::int64_t* start = start_.cview().p;
     const std::int64_t nf = nf_;
     const auto x = x_.cview(), v = v_.cview();
-    const auto type = type_.cview();
     const auto gid = gid_.cview();
     const auto m = m_.view();
     const auto rho = rho_.view();

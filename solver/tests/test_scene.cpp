@@ -4,6 +4,7 @@
 // validation and report their own mistakes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -213,6 +214,31 @@ TEST(Scene, ParseFromTextResolvesMeshesAgainstTheNamedFile) {
   const Scene s = parse_scene(text, kScenes / "good" / "inline.yaml");
   EXPECT_EQ(s.bodies[0].mesh.file.filename(), "tet.msh");
   EXPECT_THROW(parse_scene(text, kScenes / "bad" / "inline.yaml"), InputError);
+}
+
+TEST(Scene, BoxRotatesAboutItsOriginCorner) {
+  // A 1 x 2 x 3 box at origin (1, 0, 0) tipped 90 degrees about +y: its z edge turns to +x.
+  const Model m = build_model(parse_scene(
+      "run: {end_time: 1}\nmaterials: {m: {E: 1, nu: 0, density: 1}}\n"
+      "bodies: [{name: b, material: m, mesh: {type: box, origin: [1, 0, 0], size: [1, 2, 3], "
+      "cells: [1, 1, 1], rotate: {axis: [0, 2, 0], angle: 90}}}]\n",
+      kScenes / "good" / "inline.yaml"));
+  Vec3 lo{1e9, 1e9, 1e9}, hi{-1e9, -1e9, -1e9};
+  for (const Vec3& p : m.X)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], p[a]);
+      hi[a] = std::max(hi[a], p[a]);
+    }
+  EXPECT_NEAR(lo.x, 1, 1e-12);
+  EXPECT_NEAR(hi.x, 4, 1e-12);
+  EXPECT_NEAR(lo.y, 0, 1e-12);
+  EXPECT_NEAR(hi.y, 2, 1e-12);
+  EXPECT_NEAR(lo.z, -1, 1e-12);
+  EXPECT_NEAR(hi.z, 0, 1e-12);
+  EXPECT_NE(error_of(kScenes / "good" / "minimal.yaml",
+                     {"bodies.0.mesh.rotate={axis: [0, 0, 0], angle: 1}"})
+                .find("rotate.axis: must not be the zero vector"),
+            std::string::npos);
 }
 
 }  // namespace
