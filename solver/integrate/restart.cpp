@@ -239,14 +239,21 @@ Checkpoint capture_checkpoint(const Scene& scene, const Model& model, double dt,
   c.tet_gid = model.tet_gid;
   c.solid = backend.save_state();
   if (c.solid.contact) {
-    ContactState& s = *c.solid.contact;
-    for (std::size_t k = 0; k < s.size(); ++k) {
-      c.contact_keys.push_back(global_key(model, s.k1[k], s.k2[k]));
-      for (auto& i : s.v[k])
+    // The active entries (an inactive one is never looked up), in key order, so that the file
+    // does not depend on how many ranks wrote it.
+    ContactState& all = *c.solid.contact;
+    ContactState s = all;
+    s.resize(0);
+    for (std::size_t k = 0; k < all.size(); ++k) {
+      if (!all.active[k]) continue;
+      s.push_back(all, k);
+      c.contact_keys.push_back(global_key(model, all.k1[k], all.k2[k]));
+      for (auto& i : s.v.back())
         if (i >= 0) i = static_cast<std::int64_t>(model.gid[i]);
     }
     s.k1.clear();
     s.k2.clear();
+    all = std::move(s);
   }
   if (fluid) c.fluid = fluid->save_state();
   return c;

@@ -6,20 +6,23 @@
 //   /solid/          vertex_gid (N) uint64, x v f (N,3), dissipated (N);
 //                    tet_gid (M) uint64, tet_dissipated (M)
 //   /contact/        (contact scenes) the history (contact/contact_state.hpp), one row per
-//                    record of the last step: history_type (K) uint8, history_feature1/2
-//                    (K,3) uint64 (global vertex ids; unused slots 2^64-1), history_active
-//                    (K) uint8, history_xi history_h (K,3), history_energy history_energy_t
-//                    (K), history_vertex (K,4) int64 (global vertex ids; -1: unused),
-//                    history_weight (K,4), history_n1 (K) int32;
-//                    ref_centroid (P,3), ref_radius (P): the pair list's rebuild reference;
+//                    active record of the last step, in key order: history_type (K) uint8,
+//                    history_feature1/2 (K,3) uint64 (global vertex ids; unused slots
+//                    2^64-1), history_active (K) uint8, history_xi history_h (K,3),
+//                    history_energy history_energy_t (K), history_vertex (K,4) int64 (global
+//                    vertex ids; -1: unused), history_weight (K,4), history_n1 (K) int32;
+//                    ref_centroid (P,3), ref_radius (P): the pair list's rebuild reference
+//                    (empty when written on several ranks: it belongs to one layout);
 //                    attributes skin, max_overlap, max_overlap_ever, dissipated (double),
-//                    rebuilds, steps, pairs, contacts, active (int64)
+//                    rebuilds, steps, pairs, contacts, active (int64) (on several ranks: the
+//                    counters of summary.json's contact object; steps 0)
 //   /fluid/          (SPH scenes) gid (n) uint64, type (n) uint8, x v a (n,3), rho p m (n), in
 //                    the solver's particle order (the next step's summation order)
 //   /output/         attributes probes_bytes, fluid_csv_bytes, field_frames, fluid_frames,
 //                    last_probe_step, last_field_step (int64), next_probe, next_field (double)
 // Everything is keyed by global ids (vertex, tet, particle; contact features by their
-// vertices' ids), so a distributed run can map the state to any rank layout.
+// vertices' ids), so the state is the same whichever number of ranks wrote it (rank 0 writes
+// it gathered from all) and any number of ranks can restart from it.
 //
 // Writing is atomic: PATH.tmp is written, flushed, fsync'ed and renamed over PATH, then the
 // folder is fsync'ed. A process killed at any moment leaves the earlier checkpoints intact.
