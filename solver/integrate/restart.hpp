@@ -1,6 +1,7 @@
 // Checkpoint/restart of a dynamic run: the state between two steps taken from the backend,
 // the fluid stage and the stepper (capture), checked against a scene and put back (restore),
-// so that N steps + restart + N steps is bit-identical to 2N steps on the CPU backend. The
+// so that N steps + restart + N steps is bit-identical to 2N steps on the CPU backend, on any
+// number of ranks (the same file from any rank count, restarted on any rank count). The
 // file format is io/checkpoint_h5.hpp; the run driver (app/run_scene.cpp) adds the outputs.
 #pragma once
 
@@ -32,6 +33,8 @@ Fingerprint make_fingerprint(const Scene& scene, const Model& model, double dt,
 std::vector<std::string> fingerprint_differences(const Fingerprint& saved, const Fingerprint& now);
 
 // The run's state after `stepper.steps()` steps; output fields are left to the caller.
+// Collective with a distributed backend (parallel/distributed_backend.hpp): the state is
+// gathered to rank 0, which gets the same checkpoint as one rank (other ranks: no state).
 Checkpoint capture_checkpoint(const Scene& scene, const Model& model, double dt, Backend& backend,
                               FluidStage* fluid, const FluidSetup* fluid_setup,
                               const Stepper& stepper);
@@ -43,6 +46,8 @@ void check_checkpoint(const Checkpoint& c, const std::string& source, const Scen
 // Checks c against the scene (check_checkpoint) and puts the
 // state back into the backend, the fluid stage and the stepper's clock. Call after the
 // Stepper is constructed (its first force evaluation would overwrite the restored forces).
+// With a distributed backend every rank passes the whole checkpoint (collective): each takes a
+// share, repartitioned for this number of ranks.
 void restore_checkpoint(const Checkpoint& c, const std::string& source, const Scene& scene,
                         const Model& model, double dt, Backend& backend, FluidStage* fluid,
                         const FluidSetup* fluid_setup, Stepper& stepper);

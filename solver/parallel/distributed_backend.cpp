@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "core/error.hpp"
 #include "core/timers.hpp"
 #include "parallel/balance.hpp"
 #include "parallel/comm_plan.hpp"
@@ -57,6 +58,35 @@ std::vector<T> gatherv(MPI_Comm comm, const std::vector<T>& mine) {
   MPI_Gatherv(mine.data(), n, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, 0,
               comm);
   return all;
+}
+
+// Every rank's slice on rank 0, concatenated in rank order, the contact dissipation summed
+// (other ranks: empty).
+StateSlice gather_slices(MPI_Comm comm, const StateSlice& s) {
+  StateSlice a;
+  a.vertex = gatherv(comm, s.vertex);
+  a.x = gatherv(comm, s.x);
+  a.v = gatherv(comm, s.v);
+  a.f = gatherv(comm, s.f);
+  a.diss_v = gatherv(comm, s.diss_v);
+  a.x0 = gatherv(comm, s.x0);
+  a.f0 = gatherv(comm, s.f0);
+  a.tet = gatherv(comm, s.tet);
+  a.diss_t = gatherv(comm, s.diss_t);
+  const ContactState& c = s.contact;
+  ContactState& h = a.contact;
+  h.k1 = gatherv(comm, c.k1);
+  h.k2 = gatherv(comm, c.k2);
+  h.active = gatherv(comm, c.active);
+  h.xi = gatherv(comm, c.xi);
+  h.h = gatherv(comm, c.h);
+  h.energy = gatherv(comm, c.energy);
+  h.energy_t = gatherv(comm, c.energy_t);
+  h.v = gatherv(comm, c.v);
+  h.w = gatherv(comm, c.w);
+  h.n1 = gatherv(comm, c.n1);
+  for (double d : gatherv(comm, std::vector<double>{c.dissipated})) h.dissipated += d;
+  return a;
 }
 
 template <class T>
@@ -153,21 +183,16 @@ class DistributedImpl final : public DistributedBackend {
         if (ix_.contact_vertex[i]) fixed_cells_[cell_key(m.X[i])].push_back(i);
     }
     precompute_fixed_output();
-    // Every rank starts from a contiguous slice of the model's state, then the first
-    // partition moves it to the owners: the restart path, taken by every run.
-    StateSlice s;
-    const std::int64_t nfv = m.n_free_vertices, nft = m.n_free_tets;
-    for (std::int64_t i = nfv * me_ / np_; i < nfv * (me_ + 1) / np_; ++i) {
-      s.vertex.push_back(i);
-      s.x.push_back(m.x[i]);
-      s.v.push_back(m.v[i]);
-      s.diss_v.push_back(0.0);
-    }
-    for (std::int64_t t = nft * me_ / np_; t < nft * (me_ + 1) / np_; ++t) {
-      s.tet.push_back(t);
-      s.diss_t.push_back(0.0);
-    }
-    adopt(s);
+    // Every rank starts from a contiguous share of the model's initial state, then the first
+    // partition moves it to the owners: the restart path (load_state), taken by every run.
+    BackendState s;
+    s.x = m.x;
+    s.v = m.v;
+    s.f.assign(m.n_vertices(), Vec3{});
+    s.diss_v.assign(m.n_vertices(), 0.0);
+    s.diss_t.assign(m.n_tets(), 0.0);
+    if (contact_) s.contact.emplace();
+    load_state(s);
   }
 
   void adopt(const StateSlice& s) override {
@@ -383,8 +408,6 @@ class DistributedImpl final : public DistributedBackend {
     unsupported("element_forces");
   }
   void assemble_forces(double, double) override { unsupported("assemble_forces"); }
-  BackendState save_state() override { unsupported("save_state (use export_state)"); }
-  void load_state(const BackendState&) override { unsupported("load_state (use adopt)"); }
   void set_halo(const std::vector<std::int64_t>&, std::int64_t, std::int64_t) override {
     unsupported("set_halo");
   }
@@ -448,6 +471,7 @@ class DistributedImpl final : public DistributedBackend {
       s.vertex.push_back(L_.vertices[i]);
       s.x.push_back(h.x[i]);
       s.v.push_back(h.v[i]);
+      s.f.push_back(st.f[i]);
       s.diss_v.push_back(st.diss_v[i]);
       if (relaxing_) {
         s.x0.push_back(st.x0[i]);
@@ -462,6 +486,7 @@ class DistributedImpl final : public DistributedBackend {
     // rank holds the pair's whole neighbourhood, so its entry is the right one).
     if (!st.contact) return s;
     const ContactState& c = *st.contact;
+    s.contact.dissipated = c.dissipated;  // this rank's share (EnergyOwner)
     for (std::size_t e = 0; e < c.size(); ++e) {
       if (!c.active[e]) continue;  // an inactive entry is never looked up
       std::array<std::int64_t, 4> kv{-1, -1, -1, -1};
@@ -478,6 +503,103 @@ class DistributedImpl final : public DistributedBackend {
       s.contact.v.back() = kv;
     }
     return s;
+  }
+
+  // The whole model's state on rank 0, as one rank's backend has it: free vertices and tets
+  // from their owners and home ranks, fixed bodies from the model (they never move; force and
+  // dissipation zero), the history sorted by key, the contact counters of contact_stats(). The
+  // pair-list reference stays empty: it belongs to one layout.
+  BackendState save_state() override {
+    const std::map<std::string, double> counters = contact_stats();
+    const StateSlice a = gather_slices(comm_, export_state());
+    BackendState w;
+    if (me_ != 0) return w;
+    const Model& g = *g_;
+    w.x = g.x;
+    w.v = g.v;
+    w.f.assign(g.n_vertices(), Vec3{});
+    w.diss_v.assign(g.n_vertices(), 0.0);
+    w.diss_t.assign(g.n_tets(), 0.0);
+    if (relaxing_) {
+      w.x0.assign(g.n_vertices(), Vec3{});
+      w.f0.assign(g.n_vertices(), Vec3{});
+    }
+    for (std::size_t k = 0; k < a.vertex.size(); ++k) {
+      const std::int64_t i = a.vertex[k];
+      w.x[i] = a.x[k];
+      w.v[i] = a.v[k];
+      w.f[i] = a.f[k];
+      w.diss_v[i] = a.diss_v[k];
+      if (relaxing_) {
+        w.x0[i] = a.x0[k];
+        w.f0[i] = a.f0[k];
+      }
+    }
+    for (std::size_t k = 0; k < a.tet.size(); ++k) w.diss_t[a.tet[k]] = a.diss_t[k];
+    if (!contact_) return w;
+    const ContactState& h = a.contact;
+    std::vector<std::size_t> order(h.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::sort(order.begin(), order.end(), [&](std::size_t p, std::size_t q) {
+      return std::pair(h.k1[p], h.k2[p]) < std::pair(h.k1[q], h.k2[q]);
+    });
+    ContactState& c = w.contact.emplace();
+    for (std::size_t e : order) c.push_back(h, e);
+    c.dissipated = h.dissipated;
+    c.stats = {static_cast<std::int64_t>(counters.at("pairs")),
+               static_cast<std::int64_t>(counters.at("contacts")),
+               static_cast<std::int64_t>(counters.at("active")), counters.at("max_overlap")};
+    c.max_overlap_ever = counters.at("max_overlap_ever");
+    c.rebuilds = static_cast<std::int64_t>(counters.at("pair_rebuilds"));
+    return w;
+  }
+
+  // Every rank passes the whole model's state; each adopts a contiguous share of the free
+  // vertices, free tets and active history entries (rank 0 takes the contact dissipation).
+  // The pair-list reference is dropped (the list is built afresh for the new layout); the
+  // counters carry on.
+  void load_state(const BackendState& w) override {
+    if (!g_) throw std::logic_error("DistributedBackend::load_state before upload");
+    const Model& g = *g_;
+    const auto fits = [](const auto& a, std::int64_t n) {
+      return static_cast<std::int64_t>(a.size()) == n;
+    };
+    const std::int64_t nv = g.n_vertices(), nt = g.n_tets();
+    const bool relax = !w.x0.empty();
+    if (!fits(w.x, nv) || !fits(w.v, nv) || !fits(w.f, nv) || !fits(w.diss_v, nv) ||
+        !fits(w.diss_t, nt) || (relax && (!fits(w.x0, nv) || !fits(w.f0, nv))) ||
+        w.contact.has_value() != contact_)
+      throw InputError("backend state does not fit the model (vertex, tet or contact counts)");
+    StateSlice s;
+    const std::int64_t nfv = g.n_free_vertices, nft = g.n_free_tets;
+    for (std::int64_t i = nfv * me_ / np_; i < nfv * (me_ + 1) / np_; ++i) {
+      s.vertex.push_back(i);
+      s.x.push_back(w.x[i]);
+      s.v.push_back(w.v[i]);
+      s.f.push_back(w.f[i]);
+      s.diss_v.push_back(w.diss_v[i]);
+      if (relax) {
+        s.x0.push_back(w.x0[i]);
+        s.f0.push_back(w.f0[i]);
+      }
+    }
+    for (std::int64_t t = nft * me_ / np_; t < nft * (me_ + 1) / np_; ++t) {
+      s.tet.push_back(t);
+      s.diss_t.push_back(w.diss_t[t]);
+    }
+    if (contact_) {
+      const ContactState& c = *w.contact;
+      const std::int64_t ne = static_cast<std::int64_t>(c.size());
+      for (std::int64_t e = ne * me_ / np_; e < ne * (me_ + 1) / np_; ++e)
+        if (c.active[e]) s.contact.push_back(c, e);  // an inactive entry is never looked up
+      s.contact.dissipated = me_ == 0 ? c.dissipated : 0.0;
+    }
+    adopt(s);
+    relaxing_ = relax;
+    if (contact_) {
+      overlap_acc_ = w.contact->max_overlap_ever;
+      rebuilds_acc_ = static_cast<double>(w.contact->rebuilds);
+    }
   }
 
   std::vector<std::int64_t> owned_vertices() const override {
@@ -568,6 +690,7 @@ class DistributedImpl final : public DistributedBackend {
     if (!rebuild && !rebalance) return;
     const std::int64_t before = migrated_bytes_;
     StateSlice s = export_state();
+    s.f.clear();  // compute_forces evaluates them after the rebuild
     // A new cut that moves no vertex (timing noise) keeps the rank's model; a moved band
     // always rebuilds the ghosts.
     redistribute(s, rebalance, rebuild);
@@ -647,24 +770,29 @@ class DistributedImpl final : public DistributedBackend {
       return;
     }
 
-    // Vertices: x, v, dissipation (and the relaxation start state while relaxing).
-    int relax = !s.x0.empty(), any_relax = 0;
-    MPI_Allreduce(&relax, &any_relax, 1, MPI_INT, MPI_MAX, comm_);
+    // Vertices: x, v, dissipation (and the force of the last evaluation when the slice has it,
+    // the relaxation start state while relaxing; a rank without them sends zeros).
+    const int has[2] = {!s.f.empty(), !s.x0.empty()};
+    int any[2] = {0, 0};
+    MPI_Allreduce(has, any, 2, MPI_INT, MPI_MAX, comm_);
+    const bool any_f = any[0], any_relax = any[1];
     std::vector<std::uint64_t> vg(s.vertex.begin(), s.vertex.end());
     MigratePlan mv(comm_, dest, vg);
     const std::int64_t nn = mv.n_new();
-    std::vector<Vec3> x(nn), v(nn), x0(any_relax ? nn : 0), f0(any_relax ? nn : 0);
+    std::vector<Vec3> x(nn), v(nn), f, x0, f0;
     std::vector<double> dv(nn);
     std::vector<CommField> src{cfield(s.x), cfield(s.v), cfield(s.diss_v)},
         dst{cfield(x), cfield(v), cfield(dv)};
-    std::vector<Vec3> zeros;
-    if (any_relax) {
-      if (s.x0.empty()) zeros.assign(nsv, Vec3{});
-      src.push_back(cfield(s.x0.empty() ? zeros : s.x0));
-      src.push_back(cfield(s.f0.empty() ? zeros : s.f0));
-      dst.push_back(cfield(x0));
-      dst.push_back(cfield(f0));
-    }
+    const std::vector<Vec3> zeros(nsv);
+    auto optional_field = [&](bool any_rank, const std::vector<Vec3>& from, std::vector<Vec3>& to) {
+      if (!any_rank) return;
+      to.resize(nn);
+      src.push_back(cfield(from.empty() ? zeros : from));
+      dst.push_back(cfield(to));
+    };
+    optional_field(any_f, s.f, f);
+    optional_field(any_relax, s.x0, x0);
+    optional_field(any_relax, s.f0, f0);
     mv.begin(src);
     mv.finish(dst);
     bytes += mv.engine().last_bytes();
@@ -707,6 +835,7 @@ class DistributedImpl final : public DistributedBackend {
     CommEngine he(comm_, hoff, hranks, 0);
     ContactState hist;
     hist.resize(he.n_recv());
+    hist.dissipated = sh.dissipated;  // the rank's share stays with the rank
     {
       const CommField a[10] = {cfield(sh.k1), cfield(sh.k2),     cfield(sh.active),   cfield(sh.xi),
                                cfield(sh.h),  cfield(sh.energy), cfield(sh.energy_t), cfield(sh.v),
@@ -731,6 +860,7 @@ class DistributedImpl final : public DistributedBackend {
       mine.vertex.push_back(static_cast<std::int64_t>(ng[k]));
       mine.x.push_back(x[k]);
       mine.v.push_back(v[k]);
+      if (any_f) mine.f.push_back(f[k]);
       mine.diss_v.push_back(dv[k]);
       if (any_relax) {
         mine.x0.push_back(x0[k]);
@@ -865,10 +995,8 @@ class DistributedImpl final : public DistributedBackend {
     }
     LocalModel lm = build_local_model(g, ix_, L, x, v);
 
-    // Keep the old contact stage's counters and this rank's share of the contact dissipation,
-    // then replace the rank's model.
+    // Keep the old contact stage's counters, then replace the rank's model.
     for (const auto& [k, sec] : local_->stage_seconds()) contact_acc_[k] += sec;
-    const double contact_dissipated = rebuilds_ > 0 ? local_->energies().contact_dissipated : 0.0;
     if (contact_ && rebuilds_ > 0) {
       std::map<std::string, double> c = local_->contact_stats();
       overlap_acc_ = std::max(overlap_acc_, c["max_overlap_ever"]);
@@ -879,7 +1007,8 @@ class DistributedImpl final : public DistributedBackend {
     BackendState st;
     st.x = lm.model.x;
     st.v = lm.model.v;
-    st.f.assign(nv, Vec3{});  // the next compute_forces evaluates them
+    st.f.assign(nv, Vec3{});  // empty in the slice: the next compute_forces evaluates them
+    std::copy(s.f.begin(), s.f.end(), st.f.begin());
     st.diss_v.assign(nv, 0.0);
     std::copy(s.diss_v.begin(), s.diss_v.end(), st.diss_v.begin());
     if (!s.x0.empty()) {
@@ -913,7 +1042,7 @@ class DistributedImpl final : public DistributedBackend {
           std::unique(hidx.begin(), hidx.end(), [&](auto a, auto b) { return lk[a] == lk[b]; }),
           hidx.end());
       ContactState& c = st.contact.emplace();
-      c.dissipated = contact_dissipated;
+      c.dissipated = s.contact.dissipated;
       for (std::size_t e : hidx) {
         c.push_back(sc, e);
         c.k1.back() = lk[e].first;

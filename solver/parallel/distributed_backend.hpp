@@ -12,6 +12,10 @@
 //                    (energies count home tets and owned vertices once; ids are global, so
 //                    the Stepper's messages name the right element)
 //   download         gathered to rank 0 in global order (other ranks get empty arrays)
+//   save_state       the whole model's state gathered to rank 0 in the model's order, as one
+//                    rank's backend gives it (other ranks get an empty state): a checkpoint
+//   load_state       every rank passes the whole model's state (e.g. read from a checkpoint);
+//                    each adopts a contiguous share, which adopt() moves to the owners
 //
 // Contact across rank borders: each rank holds, besides its owned vertices and the ghosts of
 // its tets, every contact vertex within a band of its owned contact vertices (free bodies'
@@ -28,7 +32,7 @@
 // vertex and per contact vertex; above rebalance_threshold the tree is refined and cut again
 // with those costs (balance.hpp), the state migrates (MigratePlan) and the halo plans are
 // rebuilt. Every migration goes through a gid-keyed StateSlice, the same form a checkpoint
-// uses, so a restart on any number of ranks is adopt(slice).
+// is gathered from, so a restart on any number of ranks is adopt(slice).
 #pragma once
 
 #include <array>
@@ -60,13 +64,18 @@ ParallelOptions parallel_options(const ParallelSpec& spec);
 struct StateSlice {
   std::vector<std::int64_t> vertex;  // free vertices
   std::vector<Vec3> x, v;
+  // The force of the last evaluation (the next half kick reads it), or empty: zero, for a
+  // rebuild inside compute_forces, which evaluates the forces right after.
+  std::vector<Vec3> f;
   std::vector<double> diss_v;
   std::vector<Vec3> x0, f0;       // dynamic relaxation start state, or empty
   std::vector<std::int64_t> tet;  // free tets
   std::vector<double> diss_t;
   // Contact history (active entries only) with global keys (vertex gid, global triangle /
-  // edge, wall index) and the gids of each entry's vertices (-1: unused); the pair-list
-  // reference and counters stay empty (the list is rebuilt for the new layout).
+  // edge, wall index) and the gids of each entry's vertices (-1: unused); `dissipated` is
+  // this slice's share of the contact dissipation since the start (the shares sum to the
+  // run's); the pair-list reference and counters stay empty (the list is rebuilt for the new
+  // layout).
   ContactState contact;
 };
 
