@@ -202,13 +202,8 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   const CheckpointSpec& cks = scene.output.checkpoint;
   const std::filesystem::path ckpt_dir = cks.dir.empty() ? dir / "checkpoints" : cks.dir;
   const FluidSetup* fsetup = fluid_setup ? &*fluid_setup : nullptr;
-  // Checkpoints hold one process's state (Backend::save_state); the distributed backend's
-  // export_state/adopt hook is not wired to them yet (docs/parallel.md).
-  if (distributed && (opt.restart || (cks.enabled && scene.run.mode == RunMode::Dynamic)))
-    throw InputError(
-        "output.checkpoint and --restart are not supported on several MPI ranks yet; run the "
-        "scene on one process");
-  // A restart is checked against the scene before any output is touched.
+  // A restart is checked against the scene before any output is touched. Under mpirun every
+  // rank reads the checkpoint; the backend's load_state gives each rank its share.
   std::optional<Checkpoint> restart;
   std::filesystem::path restart_path;
   if (opt.restart) {
@@ -261,8 +256,10 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   if (restart)
     restore_checkpoint(*restart, restart_path.string(), scene, model, dt, *be, fluid.get(), fsetup,
                        st);
+  // Checkpoints are gathered from every rank (Backend::save_state) and written by rank 0.
+  const bool checkpointing = cks.enabled && scene.run.mode == RunMode::Dynamic;
   std::optional<CheckpointSeries> checkpoints;
-  if (cks.enabled && scene.run.mode == RunMode::Dynamic) checkpoints.emplace(ckpt_dir, cks.keep);
+  if (checkpointing && root) on_root(distributed, [&] { checkpoints.emplace(ckpt_dir, cks.keep); });
 
   Json summary = Json::object();
   summary["scene"] = scene.file.string();
@@ -446,13 +443,26 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     auto checkpoint = [&] {
       auto scope = timers.scope("checkpoint");
       Checkpoint c = capture_checkpoint(scene, model, dt, *be, fluid.get(), fsetup, st);
-      c.output = {
-          probe_csv->bytes(), fluid_csv ? static_cast<std::int64_t>(std::ftell(fluid_csv)) : -1,
-          fields->frames(),   fluid_out ? fluid_out->frames() : 0,
-          next_probe,         next_field,
-          last_probe_step,    last_field_step};
-      checkpoints->write(c);
+      if (root)
+        on_root(distributed, [&] {
+          c.output = {
+              probe_csv->bytes(), fluid_csv ? static_cast<std::int64_t>(std::ftell(fluid_csv)) : -1,
+              fields->frames(),   fluid_out ? fluid_out->frames() : 0,
+              next_probe,         next_field,
+              last_probe_step,    last_field_step};
+          checkpoints->write(c);
+        });
       last_checkpoint = std::chrono::steady_clock::now();
+    };
+    // Every rank must take the same decision (the checkpoint is collective), but wall clocks
+    // differ: under mpirun the interval is due once it is on every rank.
+    auto interval_due = [&] {
+      bool due = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint)
+                     .count() >= cks.every_seconds;
+#ifdef QDEMSPH_HAVE_MPI
+      if (distributed) due = world_all(due);
+#endif
+      return due;
     };
     const auto nsteps = static_cast<std::int64_t>(std::ceil(end / dt - 1e-9));
     for (std::int64_t n = st.steps() + 1; n <= nsteps; ++n) {
@@ -468,11 +478,8 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
         write_fields(true);
         next_field += field_dt;
       }
-      if (checkpoints &&
-          ((cks.every_steps > 0 && n % cks.every_steps == 0) ||
-           (cks.every_seconds > 0 &&
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint)
-                    .count() >= cks.every_seconds)))
+      if (checkpointing && ((cks.every_steps > 0 && n % cks.every_steps == 0) ||
+                            (cks.every_seconds > 0 && interval_due())))
         checkpoint();
       progress.update(static_cast<double>(n) / nsteps, n, fmt::format("t = {:.4g} s", t).c_str());
     }
