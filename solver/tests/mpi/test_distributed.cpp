@@ -20,6 +20,7 @@
 #include <numeric>
 #include <set>
 
+#include "distributed_fixture.hpp"
 #include "integrate/stepper.hpp"
 #include "io/scene_yaml.hpp"
 #include "model/model.hpp"
@@ -28,77 +29,9 @@
 #include "parallel/local_model.hpp"
 
 using namespace qdemsph;
+using namespace qdemsph::mpi_testing;
 
 namespace {
-
-int rank_of(MPI_Comm c = MPI_COMM_WORLD) {
-  int r;
-  MPI_Comm_rank(c, &r);
-  return r;
-}
-int size_of(MPI_Comm c = MPI_COMM_WORLD) {
-  int s;
-  MPI_Comm_size(c, &s);
-  return s;
-}
-
-// A tumbling viscoelastic bar, clamped at one end region, a prescribed-velocity patch at the
-// other, a point load: every element and integration path.
-const char* kElementScene = R"(
-run: {mode: dynamic, end_time: 1.0}
-gravity: [0, 0, -9.81]
-damping: {mass: 0.5}
-materials: {m: {law: svk, E: 2.0e6, nu: 0.3, density: 1000, viscosity: 30}}
-bodies:
-  - {name: bar, material: m, mesh: {type: box, size: [1.0, 0.3, 0.2], cells: [10, 3, 2]},
-     velocity: [0.3, -0.2, 0.5], angular_velocity: [2, -1, 3]}
-constraints:
-  - {type: fixed, body: bar, region: {x: [0, 0]}}
-  - {type: velocity, body: bar, region: {x: [1, 1], z: [0.1, 0.2]}, velocity: [0, 0, -0.5]}
-loads:
-  - {type: point, body: bar, at: [0.5, 0.3, 0.2], force: [0, 5, -20]}
-)";
-
-// Two free cubes falling onto a fixed block, sliding against a wall, with friction.
-const char* kContactScene = R"(
-run: {mode: dynamic, end_time: 1.0}
-gravity: [0, 0, -9.81]
-materials: {m: {E: 1.0e6, nu: 0.3, density: 1000, viscosity: 50}}
-contact: {mu: 0.4, restitution: 0.5, d_dem: 0.004}
-walls: [{point: [-0.02, 0, 0], normal: [1, 0, 0], mu: 0.3}]
-bodies:
-  - {name: a, material: m, mesh: {type: box, origin: [0.0, 0.0, 0.101], size: [0.1, 0.1, 0.1], cells: [3, 3, 3]},
-     velocity: [-1.0, 0.2, -1.5], angular_velocity: [3, -4, 2]}
-  - {name: b, material: m, mesh: {type: box, origin: [0.13, 0.02, 0.102], size: [0.1, 0.1, 0.1], cells: [3, 3, 3]},
-     velocity: [-1.0, 0, -1.0], angular_velocity: [0, 5, 0]}
-  - {name: base, material: m, fixed: true, mesh: {type: box, origin: [-0.1, -0.1, 0.0], size: [0.45, 0.3, 0.1], cells: [6, 4, 2]}}
-)";
-
-struct Problem {
-  Scene scene;
-  Model model;
-};
-
-Problem load(const char* yaml, const std::vector<std::string>& overrides = {}) {
-  Problem r;
-  r.scene = parse_scene(yaml, "distributed_test.yaml", overrides);
-  r.model = build_model(r.scene);
-  return r;
-}
-
-ParallelOptions options(long every, double threshold, const std::string& curve = "hilbert") {
-  ParallelOptions o;
-  o.curve = curve;
-  o.rebalance_every = every;
-  o.rebalance_threshold = threshold;
-  return o;
-}
-
-double max_diff(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
-  double m = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, norm(a[i] - b[i]));
-  return m;
-}
 
 // Every vertex gid owned exactly once and every free tet gid home exactly once over `comm`.
 void expect_each_once(const Model& m, const DistributedBackend& be, MPI_Comm comm) {
