@@ -127,12 +127,15 @@ class Qdemsph:
             raise QdemsphError(f"exit code {proc.returncode}: {' '.join(cmd)}\n{_tail(proc.stderr or proc.stdout)}")
         return wall, log, proc.returncode
 
-    def run(self, scene, out, sets=(), ranks=None):
+    def run(self, scene, out, sets=(), ranks=None, restart=None):
         """Run a scene; returns RunResult. Extra `sets` are 'dotted.key=yaml_value' strings.
         ranks: run under `mpirun -np RANKS` (Open MPI; oversubscribed when the machine has fewer
-        cores), on one process otherwise."""
+        cores), on one process otherwise. restart: continue from a checkpoint (`--restart`: a
+        file or "latest")."""
         scene, out = Path(scene), Path(out)
         args = ["run", scene, "--out", out, "--quiet"]
+        if restart:
+            args += ["--restart", restart]
         if self.backend:
             args += ["--backend", self.backend]
         if self.threads and self.threads > 0:
