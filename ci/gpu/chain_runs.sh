@@ -2,7 +2,8 @@
 # The 40-piece shogi chain (verification/cases/yade_shogi_chain) and 20-piece variants on one
 # GPU, all at once (MPS when it starts): mesh refinement, 4 x stiffer bodies, piece-piece
 # friction 0.3. Two stages, since the GPU machines have no gmsh:
-#   ci/gpu/chain_runs.sh prepare DIR               here: premeshed scenes (ci/gpu/premesh.py)
+#   ci/gpu/chain_runs.sh prepare DIR [NAME ...]    here: premeshed scenes (ci/gpu/premesh.py),
+#                                                  all variants or the NAMEs given
 #   DIR/../chain_runs.sh run DIR PACK OUT [LIMIT_S] there: runs, then one .tgz per variant in OUT
 #   ci/gpu/chain_runs.sh analyse OUT RECORD.json   here: fall times and front speeds, one record
 # (records of 2026-11-25: references/benchmarks/gpu/2026-11-25_h100_chain.json).
@@ -17,8 +18,9 @@ f20_4 20 0.004 1.9 -
 f20_3 20 0.003 1.9 -"
 case ${1:?prepare, run or analyse} in
 prepare)
-  DIR=${2:?DIR}; mkdir -p "$DIR"; cp "$0" "$DIR/../chain_runs.sh"
+  DIR=${2:?DIR}; shift 2; mkdir -p "$DIR"; cp "$0" "$DIR/../chain_runs.sh"
   while read -r name n h end sets; do
+    [ $# -eq 0 ] || [[ " $* " == *" $name "* ]] || continue
     /usr/bin/python3 "$CASE/make_yade_chain.py" --n "$n" --mesh-size "$h" --end-time "$end" --out "$DIR/$name.yaml"
     /usr/bin/python3 "$ROOT/ci/gpu/premesh.py" "$ROOT/build/bin/qdemsph" "$DIR/$name.yaml" "$DIR/$name" >/dev/null
     echo "$sets" >"$DIR/$name/sets"

@@ -899,7 +899,7 @@ class ContactStage {
  private:
   std::int64_t nv_ = 0, nfv_ = 0, ntri_ = 0, ne_ = 0, np_ = 0, npf_ = 0, nwv_ = 0, nw_ = 0,
                n_prev_ = 0;
-  double d_dem_ = 0, kn_factor_ = 0.5, kt_ratio_ = 2.0 / 7.0;
+  double d_dem_ = 0, kn_factor_ = 0.1, kt_ratio_ = 2.0 / 7.0;
   bool self_ = false;
   int nm_ = 0;
   Vec3Buffer tri_n_{S};

@@ -157,7 +157,7 @@ struct ContactSpec {
   std::optional<double> d_dem;  // absent: 0.1 x the smallest body's mean surface edge
   bool self_contact = false;
   std::string broad_phase = "polygons";  // polygons | surface_tets | all_tets (report Fig. 7)
-  double stiffness_factor = 0.5;         // default k_n = factor * E_pair * h_pair
+  double stiffness_factor = 0.1;         // default k_n = factor * E_pair * h_pair
   std::optional<double> skin;  // pair-list Verlet skin [m]; absent: auto; 0: rebuild every step
   // Penetration guard [m]: the run stops when surfaces cross deeper; absent: half the pair's
   // smaller mean surface edge.

@@ -37,7 +37,7 @@ struct ContactModel {
   BroadPhase mode = BroadPhase::Polygons;
   double d_dem = 0;  // virtual DEM particle diameter [m]
   bool self_contact = false;
-  double kn_factor = 0.5;  // default k_n = kn_factor * E_pair * h_pair
+  double kn_factor = 0.1;  // default k_n = kn_factor * E_pair * h_pair
   double kt_ratio = 2.0 / 7.0;
   double skin = -1;            // pair-list Verlet skin [m]; < 0: auto (D_DEM + max r / 4)
   double max_penetration = 0;  // penetration guard [m]; 0: half the pair's mean surface edge

@@ -31,6 +31,9 @@ WINDOWS = {"5_18": (5, 18), "5_35": (5, 35)}  # the 20-piece variants' window; t
 TOL_SPEED = 0.15
 # The chain and its variants run on a GPU (ci/gpu/chain_runs.sh; README.md, "GPU runs").
 GPU_RUNS = REPO / "references" / "benchmarks" / "gpu" / "2026-11-25_h100_chain.json"
+# The same chain and the mu 0.3 variant at the contact stiffness default of 0.1 (the runs above
+# used 0.5, the default until contact_ladder showed it loses static friction).
+GPU_RUNS_K01 = REPO / "references" / "benchmarks" / "gpu" / "2026-11-25_h100_chain_k01.json"
 GPU_VARIANTS = {"c40": "40 pieces, 6 mm mesh", "c20_E4": "20 pieces, 6 mm, 4 x E",
                 "c20_mu03": "20 pieces, 6 mm, piece-piece mu 0.3", "f20_4": "20 pieces, 4 mm mesh",
                 "f20_3": "20 pieces, 3 mm mesh"}
@@ -103,6 +106,22 @@ def test_recorded_gpu_chain(checks):
         f = [float("nan") if x is None else x for x in r["fall_time_s"]]
         checks.series("yade_shogi_chain_gpu_fall_times", f"qdemsph {label}", range(len(f)), f, style="points",
                       **meta)
+    k01 = {r["run"]: r for r in json.loads(GPU_RUNS_K01.read_text())}
+    checks.check("gpu_run_k01.c40_fallen", k01["c40"]["fallen"], kind="min", tolerance=make_yade_chain.N,
+                 unit="pieces", wall_s=k01["c40"]["wall_s"], backend=k01["c40"]["backend"],
+                 note="the whole chain at the contact stiffness default 0.1")
+    v01 = {n: k01[n]["front_speed_m_s"]["5..18"]["qdemsph"] for n in ("c40", "c20_mu03")}
+    for n, v in v01.items():
+        checks.info(f"gpu_run_k01.{n}.front_speed_5_18", v, unit="m/s", reference=yv["n40"],
+                    wall_s=k01[n]["wall_s"], backend=k01[n]["backend"],
+                    note=f"stiffness_factor 0.1; {v / yv['n40'] - 1:+.1%} vs YADE base")
+    y03 = front_speed(yade("n20_mu03_dt2x")["results"]["fall_time_s"], make_yade_chain.PITCH, 5, 18)
+    checks.info("gpu_run_k01.mu03_speedup", v01["c20_mu03"] / v01["c40"] - 1, unit="-",
+                note=f"front speed at piece-piece mu 0.3 over mu 0.5; YADE {y03 / yv['n20_dt2x'] - 1:+.1%} "
+                     f"(n20_mu03_dt2x over n20_dt2x)")
+    f = [float("nan") if x is None else x for x in k01["c40"]["fall_time_s"]]
+    checks.series("yade_shogi_chain_gpu_fall_times", "qdemsph 40 pieces, stiffness_factor 0.1",
+                  range(len(f)), f, style="points", **meta)
     for tag, label in (("n40", "YADE young 1e7, omega0 5"), ("n20_stiff16", "YADE 16 x young, omega0 12")):
         f = [float("nan") if v is None else v for v in yade(tag)["results"]["fall_time_s"]]
         checks.series("yade_shogi_chain_gpu_fall_times", label, range(len(f)), f, style="points", **meta)
