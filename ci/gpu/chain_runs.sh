@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The 40-piece shogi chain (verification/cases/yade_shogi_chain) and 20-piece variants on one
-# GPU, all at once (MPS when it starts): mesh refinement, 4 x stiffer bodies, piece-piece
-# friction 0.3. Two stages, since the GPU machines have no gmsh:
+# GPU, all at once (MPS when it starts): mesh refinement, 4 x stiffer bodies, friction 0.3
+# between pieces (c20_mu03) or everywhere, as YADE's mu 0.3 run (c20_mu03all), no contact
+# damping (restitution 1, as YADE's undamped law: c20_e1*). Two stages, since the GPU machines
+# have no gmsh:
 #   ci/gpu/chain_runs.sh prepare DIR [NAME ...]    here: premeshed scenes (ci/gpu/premesh.py),
 #                                                  all variants or the NAMEs given
 #   DIR/../chain_runs.sh run DIR PACK OUT [LIMIT_S] there: runs, then one .tgz per variant in OUT
@@ -13,7 +15,11 @@ CASE=$ROOT/verification/cases/yade_shogi_chain
 # name  pieces  mesh_size  end_time  run-time overrides
 VARIANTS="c40 40 0.006 3.6 -
 c20_E4 20 0.006 1.9 materials.boxwood.E=2e7
+c20 20 0.006 1.9 -
 c20_mu03 20 0.006 1.9 contact.mu=0.3
+c20_mu03all 20 0.006 1.9 contact.mu=0.3 walls.0.mu=0.3
+c20_e1 20 0.006 1.9 contact.restitution=1.0
+c20_e1_mu03all 20 0.006 1.9 contact.restitution=1.0 contact.mu=0.3 walls.0.mu=0.3
 f20_4 20 0.004 1.9 -
 f20_3 20 0.003 1.9 -"
 case ${1:?prepare, run or analyse} in
