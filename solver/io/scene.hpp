@@ -142,6 +142,8 @@ struct FluidSpec {
   std::vector<FluidBoxSpec> walls;    // solid boxes of wall particles
   bool couple_bodies = true;          // the bodies are walls for the fluid and feel its forces
   std::optional<int> solid_substeps;  // solid steps per fluid step; absent: as many as fit
+  // [z0, z1]: the fluid is periodic in z over this range (a quasi-2D slab without side walls)
+  std::optional<std::array<double, 2>> periodic_z;
 };
 
 // Contact between bodies (docs/scene-format.md, `contact:`). Per material pair values

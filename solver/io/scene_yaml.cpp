@@ -564,7 +564,7 @@ FluidSpec parse_fluid(const Context& ctx, const Field& f) {
   const MapView m(ctx, f,
                   {"density", "sound_speed", "viscosity", "viscosity_type", "wall_viscosity",
                    "delta", "spacing", "smoothing", "hydrostatic_init", "blocks", "tanks", "walls",
-                   "couple_bodies", "solid_substeps", "min_pressure"});
+                   "couple_bodies", "solid_substeps", "min_pressure", "periodic_z"});
   FluidSpec fl;
   fl.present = true;
   if (auto v = m.opt("density")) fl.density = v->number(positive, "must be > 0");
@@ -582,13 +582,38 @@ FluidSpec parse_fluid(const Context& ctx, const Field& f) {
     fl.smoothing =
         v->number([](double x) { return x >= 1 && x <= 3; }, "must be in [1, 3] (h / spacing)");
   if (auto v = m.opt("hydrostatic_init")) fl.hydrostatic_init = v->boolean();
+  if (auto v = m.opt("periodic_z")) {
+    v->expect_list(2, "numbers [z0, z1]");
+    const double z0 = v->element(0).number(), z1 = v->element(1).number();
+    if (!(z1 > z0)) v->element(1).fail("must be > z0");
+    const double layers = (z1 - z0) / fl.spacing;
+    if (std::fabs(layers - std::round(layers)) > 1e-6 * layers)
+      v->fail("z1 - z0 must be a whole number of spacings (the lattice must tile the period)");
+    fl.periodic_z = std::array<double, 2>{z0, z1};
+  }
+  // With a periodic z every fluid box lies within the period (the lattice tiles it).
+  auto in_period = [&](const Field& bf, const FluidBoxSpec& b) {
+    if (!fl.periodic_z) return;
+    const double tol = 1e-9 * fl.spacing;
+    if (b.min.z < (*fl.periodic_z)[0] - tol || b.max.z > (*fl.periodic_z)[1] + tol)
+      bf.fail("must lie within fluid.periodic_z in z");
+  };
   const Field blocks = m.req("blocks");
-  for (const auto& bf : blocks.list()) fl.blocks.push_back(parse_fluid_box(ctx, bf, false));
+  for (const auto& bf : blocks.list()) {
+    fl.blocks.push_back(parse_fluid_box(ctx, bf, false));
+    in_period(bf, fl.blocks.back());
+  }
   if (fl.blocks.empty()) blocks.fail("at least one fluid block is required");
   if (auto v = m.opt("tanks"))
-    for (const auto& bf : v->list()) fl.tanks.push_back(parse_fluid_box(ctx, bf, true));
+    for (const auto& bf : v->list()) {
+      fl.tanks.push_back(parse_fluid_box(ctx, bf, true));
+      in_period(bf, fl.tanks.back());
+    }
   if (auto v = m.opt("walls"))
-    for (const auto& bf : v->list()) fl.walls.push_back(parse_fluid_box(ctx, bf, false));
+    for (const auto& bf : v->list()) {
+      fl.walls.push_back(parse_fluid_box(ctx, bf, false));
+      in_period(bf, fl.walls.back());
+    }
   if (auto v = m.opt("min_pressure"))
     fl.min_pressure = v->number([](double x) { return x <= 0; }, "must be <= 0 [Pa]");
   if (auto v = m.opt("couple_bodies")) fl.couple_bodies = v->boolean();

@@ -10,6 +10,12 @@
 // so two points closer than one cell width still land in the same or adjacent cells: the search
 // stays exact, it only gets slower for far-away particles.
 //
+// Periodic in z (period_z > 0, the SPH fluid's `periodic_z`): the n[2] cells tile the period
+// from origin.z exactly and z cell coordinates wrap. A search around p walks unwrapped cells
+// zz (any integer; cell zz mod n[2]) and sees each particle j of such a cell at image(x_j, zz),
+// its position shifted by whole periods into that cell: every image within the search range
+// once, for any number of cells across the period.
+//
 // The cell-key pass is a for_each (host or device); the sort is sort_by_key: a serial counting
 // sort here (HostExec), a stable radix sort on the device in neighbor_cuda.cuh (CudaExec). Both
 // give the same order and offsets, so neighbour sums run in the same order on either backend.
@@ -31,6 +37,19 @@ struct CellGrid {
   double cell = 1, inv_cell = 1;
   int n[3] = {1, 1, 1};
 
+  double period_z = 0;  // > 0: periodic in z with this period
+
+  // A grid covering [lo, hi] with cells of at least `min_cell`, periodic in z over
+  // [z0, z0 + period_z] when period_z > 0 (cells then tile the period: cell = period / n[2]).
+  static CellGrid cover(Vec3 lo, Vec3 hi, double min_cell, double z0, double period_z) {
+    if (!(period_z > 0)) return cover(lo, hi, min_cell);
+    const int nz = std::max(1, static_cast<int>(std::floor(period_z / min_cell)));
+    CellGrid g = cover(lo, hi, period_z / nz);
+    g.origin.z = z0;
+    g.n[2] = nz;
+    g.period_z = period_z;
+    return g;
+  }
   // A grid covering [lo, hi] with cells of at least `min_cell`.
   static CellGrid cover(Vec3 lo, Vec3 hi, double min_cell) {
     CellGrid g;
@@ -45,8 +64,26 @@ struct CellGrid {
   QDEMSPH_HD int coord(double x, int a) const {
     const double o = a == 0 ? origin.x : (a == 1 ? origin.y : origin.z);
     int c = static_cast<int>(floor((x - o) * inv_cell));
+    if (a == 2 && period_z > 0) {
+      c %= n[2];
+      return c < 0 ? c + n[2] : c;
+    }
     c = c < 0 ? 0 : c;
     return c >= n[a] ? n[a] - 1 : c;
+  }
+  // Periodic z: the unwrapped z cell of a position, and the image of x in unwrapped cell zz
+  // (x itself when not periodic).
+  QDEMSPH_HD int unwrapped_z(double z) const {
+    return static_cast<int>(floor((z - origin.z) * inv_cell));
+  }
+  QDEMSPH_HD Vec3 image(Vec3 x, int zz) const {
+    if (period_z > 0) x.z += ((zz - unwrapped_z(x.z)) / n[2]) * period_z;
+    return x;
+  }
+  // Periodic z: x moved by whole periods into [origin.z, origin.z + period_z).
+  QDEMSPH_HD Vec3 wrap(Vec3 x) const {
+    if (period_z > 0) x.z -= period_z * floor((x.z - origin.z) / period_z);
+    return x;
   }
   QDEMSPH_HD std::int64_t key(int cx, int cy, int cz) const {
     return (std::int64_t(cz) * n[1] + cy) * n[0] + cx;

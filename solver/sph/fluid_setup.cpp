@@ -58,6 +58,12 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
   P.delta = spec.delta;
   P.wall_viscosity = spec.wall_viscosity;
   P.gravity = gravity;
+  if (spec.periodic_z) {
+    if (up == 2)
+      throw InputError("fluid.periodic_z: gravity points along z; the periodic axis must be horizontal");
+    f.z0 = (*spec.periodic_z)[0];
+    f.period_z = (*spec.periodic_z)[1] - f.z0;
+  }
 
   auto add = [&](Vec3 x, std::uint8_t type, double p) {
     f.x.push_back(x);
@@ -90,8 +96,8 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
   }
   f.n_fluid = f.size();
 
-  // Tanks: lattice points of the inner box grown by L layers (not on the open top) that lie
-  // outside the inner box.
+  // Tanks: lattice points of the inner box grown by L layers (not on the open top, nor across a
+  // periodic z) that lie outside the inner box.
   for (const auto& t : spec.tanks) {
     const auto n = lattice(t.min, t.max, dx);
     const int L = t.thickness_layers;
@@ -104,6 +110,10 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
       hi[up] = n[up];
     else
       lo[up] = 0;
+    if (f.period_z > 0) {
+      lo[2] = 0;
+      hi[2] = n[2];
+    }
     for (int k = lo[2]; k < hi[2]; ++k)
       for (int j = lo[1]; j < hi[1]; ++j)
         for (int i = lo[0]; i < hi[0]; ++i) {

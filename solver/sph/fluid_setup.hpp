@@ -23,6 +23,7 @@ struct FluidSetup {
   double dx = 0;      // particle spacing
   double height = 0;  // largest fluid block height along gravity (for auto c0)
   Vec3 lo{}, hi{};    // box the neighbour grid covers (all particles plus a margin)
+  double z0 = 0, period_z = 0;  // periodic_z: [z0, z0 + period_z] (period_z 0: not periodic)
   std::vector<Vec3> x, v;
   std::vector<double> rho, p, m;
   std::vector<std::uint8_t> type;

@@ -40,23 +40,31 @@ QDEMSPH_HD int sph_group(std::uint8_t type) {
 inline constexpr int kSphCellsPerSupport = 2;
 
 // Neighbour ranges over arrays sorted by (group, cell): the particles of group q in cell c are
-// [start[q nc + c], start[q nc + c + 1]), nc the number of cells. Calls f(j) for every particle
-// of the groups [g0, g1) in the (2R + 1)^3 cells around p, R = kSphCellsPerSupport.
+// [start[q nc + c], start[q nc + c + 1]), nc the number of cells. Calls f(j, zz) for every
+// particle of the groups [g0, g1) in the (2R + 1)^3 cells around p, R = kSphCellsPerSupport;
+// zz is the unwrapped z cell: f sees particle j at g.image(x[j], zz) (a periodic z, cell_grid.hpp).
 template <class F>
 QDEMSPH_HD void sph_for_each_near(const CellGrid& g, const std::int64_t* start, int g0, int g1,
                                   Vec3 p, F&& f) {
   constexpr int R = kSphCellsPerSupport;
   const std::int64_t nc = std::int64_t(g.n[0]) * g.n[1] * g.n[2];
-  const int cx = g.coord(p.x, 0), cy = g.coord(p.y, 1), cz = g.coord(p.z, 2);
+  const bool pz = g.period_z > 0;
+  const int cx = g.coord(p.x, 0), cy = g.coord(p.y, 1), cz = pz ? g.unwrapped_z(p.z) : g.coord(p.z, 2);
   const int x0 = cx > R ? cx - R : 0, x1 = cx + R < g.n[0] ? cx + R : g.n[0] - 1;
-  for (int z = cz - R; z <= cz + R; ++z) {
-    if (z < 0 || z >= g.n[2]) continue;
+  for (int zz = cz - R; zz <= cz + R; ++zz) {
+    int z = zz;
+    if (pz) {
+      z %= g.n[2];
+      z = z < 0 ? z + g.n[2] : z;
+    } else if (z < 0 || z >= g.n[2]) {
+      continue;
+    }
     for (int y = cy - R; y <= cy + R; ++y) {
       if (y < 0 || y >= g.n[1]) continue;
       const std::int64_t row = g.key(0, y, z);
       for (int q = g0; q < g1; ++q) {
         const std::int64_t* s = start + q * nc + row;
-        for (std::int64_t j = s[x0]; j < s[x1 + 1]; ++j) f(j);
+        for (std::int64_t j = s[x0]; j < s[x1 + 1]; ++j) f(j, zz);
       }
     }
   }
@@ -84,7 +92,8 @@ class SphStage final : public FluidStage {
     m_.assign(f.m);
     type_.assign(f.type);
     gid_.assign(f.gid);
-    grid_ = CellGrid::cover(f.lo, f.hi, P_.kernel.support() / kSphCellsPerSupport);
+    grid_ = CellGrid::cover(f.lo, f.hi, P_.kernel.support() / kSphCellsPerSupport, f.z0,
+                            f.period_z);
     start_.resize(kSphGroups * grid_.count() + 1);
     if (nm_ > 0) {
       if (!solid) throw InputError("the fluid has body markers but no body state to couple to");
@@ -104,8 +113,9 @@ class SphStage final : public FluidStage {
   void drift(double h) override {
     const auto v = v_.cview();
     const auto x = x_.view();
+    const CellGrid g = grid_;
     for_each(
-        Exec{}, nf_, QDEMSPH_LAMBDA(std::int64_t i) { x.set(i, x[i] + h * v[i]); });
+        Exec{}, nf_, QDEMSPH_LAMBDA(std::int64_t i) { x.set(i, g.wrap(x[i] + h * v[i])); });
     pending_dt_ += h;
   }
 
@@ -133,9 +143,10 @@ class SphStage final : public FluidStage {
           const PairState si{x[i], v[i], rho[i], m[i], 0.0};
           double dr = 0;
           const double s2 = P.kernel.support2;
-          sph_for_each_near(g, start, kGroupFluid, kSphGroups, si.x, [&](std::int64_t j) {
-            const Vec3 xj = x[j];
-            if (j == i || norm2(si.x - xj) >= s2) return;  // most candidates: no further loads
+          sph_for_each_near(g, start, kGroupFluid, kSphGroups, si.x, [&](std::int64_t j, int zz) {
+            const Vec3 xj = g.image(x[j], zz);
+            const double r2 = norm2(si.x - xj);  // 0: i itself (not its periodic images)
+            if (r2 == 0 || r2 >= s2) return;      // most candidates: no further loads
             const PairState sj{xj, v[j], rho[j], m[j], 0.0};
             dr += sph_density_rate(P, si, sj, j < nf);
           });
@@ -164,8 +175,8 @@ class SphStage final : public FluidStage {
             const std::int64_t i = nf + q;
             const Vec3 xi = x[i];
             AdamiSum s;
-            sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, xi, [&](std::int64_t j) {
-              adami_add(s, P.kernel, xi, x[j], p[j], rho[j]);
+            sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, xi, [&](std::int64_t j, int zz) {
+              adami_add(s, P.kernel, xi, g.image(x[j], zz), p[j], rho[j]);
             });
             const double pw = adami_pressure(s, P.gravity, Vec3{});
             p[i] = pw;
@@ -183,9 +194,10 @@ class SphStage final : public FluidStage {
           const PairState si{x[i], v[i], rho[i], m[i], pr[i]};
           Vec3 f{};
           const double s2 = P.kernel.support2;
-          sph_for_each_near(g, start, kGroupFluid, kSphGroups, si.x, [&](std::int64_t j) {
-            const Vec3 xj = x[j];
-            if (j == i || norm2(si.x - xj) >= s2) return;
+          sph_for_each_near(g, start, kGroupFluid, kSphGroups, si.x, [&](std::int64_t j, int zz) {
+            const Vec3 xj = g.image(x[j], zz);
+            const double r2 = norm2(si.x - xj);
+            if (r2 == 0 || r2 >= s2) return;
             const PairState sj{xj, v[j], rho[j], m[j], pr[j]};
             f +=
                 j < nf ? sph_pair_force(P, si, sj, true) : sph_boundary_force(P, si, sj, wall_visc);
@@ -204,8 +216,8 @@ class SphStage final : public FluidStage {
             const PairState si{x[i], v[i], rho[i], m[i], pr[i]};
             Vec3 f{};
             const double s2 = P.kernel.support2;
-            sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, si.x, [&](std::int64_t j) {
-              const Vec3 xj = x[j];
+            sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, si.x, [&](std::int64_t j, int zz) {
+              const Vec3 xj = g.image(x[j], zz);
               if (norm2(si.x - xj) >= s2) return;
               const PairState sj{xj, v[j], rho[j], m[j], pr[j]};
               f -= sph_boundary_force(P, sj, si, wall_visc);

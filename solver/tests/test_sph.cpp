@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <random>
 
 #include "core/error.hpp"
@@ -189,6 +190,83 @@ TEST(SphPair, BoundaryForceOnlyPushesAndDryWallsStandForAir) {
   EXPECT_GT(sph_boundary_force(P, moving, dry, true).x, 0.0);
 }
 
+// Accelerations of the fluid particles of a hydrostatic tank periodic in z over `layers`
+// spacings (no z walls), keyed by the particle's (x, y) lattice cell: v after kick(1) from rest.
+std::map<std::pair<long, long>, std::vector<Vec3>> periodic_tank_accelerations(int layers) {
+  FluidSpec s = tank_spec();
+  const double L = layers * s.spacing;
+  s.blocks[0].max.z = L;
+  s.tanks[0].max.z = L;
+  s.periodic_z = std::array<double, 2>{0.0, L};
+  SphStage<HostExec> st(build_fluid(s, Vec3{0, -9.81, 0}));
+  st.kick(1.0);
+  const FluidHost h = st.download();
+  std::map<std::pair<long, long>, std::vector<Vec3>> a;
+  for (std::size_t i = 0; i < h.x.size(); ++i)
+    if (h.type[i] == kSphFluid)
+      a[{std::lround(h.x[i].x / s.spacing - 0.5), std::lround(h.x[i].y / s.spacing - 0.5)}]
+          .push_back(h.v[i]);
+  return a;
+}
+
+TEST(SphStage, PeriodicZSlabIsTheSameForAnyNumberOfLayers) {
+  // Periodic in z every layer of a hydrostatic tank is equivalent: 1 and 2 layers (a period
+  // below the kernel support 2h = 2.6 dx: several images of one particle are neighbours) must
+  // give the 5-layer slab's accelerations, with no z component, to round-off.
+  const auto a5 = periodic_tank_accelerations(5);
+  ASSERT_EQ(a5.size(), 100u);
+  for (int layers : {1, 2}) {
+    const auto a = periodic_tank_accelerations(layers);
+    ASSERT_EQ(a.size(), a5.size());
+    double worst = 0, worst_z = 0;
+    for (const auto& [cell, acc] : a) {
+      ASSERT_EQ(acc.size(), static_cast<std::size_t>(layers));
+      const Vec3 ref = a5.at(cell)[0];
+      for (const Vec3& ai : acc) {
+        worst = std::max(worst, norm(ai - ref));
+        worst_z = std::max(worst_z, std::fabs(ai.z));
+      }
+    }
+    EXPECT_LT(worst, 1e-9) << layers << " layers: largest difference from 5 layers [m/s^2]";
+    EXPECT_LT(worst_z, 1e-9) << layers << " layers: largest |a_z| [m/s^2]";
+  }
+}
+
+TEST(SphStage, PeriodicZCloudConservesMomentumAndStaysInThePeriod) {
+  // Random velocities in a 3-layer periodic slab: particles cross z0 and z1 and are wrapped,
+  // pair forces across the period stay antisymmetric: momentum constant to round-off.
+  FluidSpec spec;
+  spec.present = true;
+  spec.spacing = 0.01;
+  spec.sound_speed = 5.0;
+  spec.viscosity = 0.1;
+  spec.hydrostatic_init = false;
+  spec.blocks.push_back({{0, 0, 0}, {0.06, 0.06, 0.03}, 3});
+  spec.periodic_z = std::array<double, 2>{0.0, 0.03};
+  FluidSetup f = build_fluid(spec, Vec3{0, 0, 0});
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> uv(-0.5, 0.5);
+  for (std::int64_t i = 0; i < f.size(); ++i) f.v[i] = {uv(rng), uv(rng), 4.0 * uv(rng)};
+  SphStage<HostExec> st(f);
+  const Vec3 p0 = st.stats().momentum;
+  double mref = 0;
+  for (std::int64_t i = 0; i < f.size(); ++i) mref += f.m[i] * norm(f.v[i]);
+  const double dt = 0.2 * f.params.kernel.h / 6.0;
+  for (int k = 0; k < 50; ++k) {
+    st.kick(0.5 * dt);
+    st.drift(dt);
+    st.compute();
+    st.kick(0.5 * dt);
+  }
+  EXPECT_LE(norm(st.stats().momentum - p0), 1e-12 * mref);
+  EXPECT_EQ(st.find_non_finite(), -1);
+  const FluidHost h = st.download();
+  for (const Vec3& x : h.x) {
+    EXPECT_GE(x.z, 0.0);
+    EXPECT_LT(x.z, 0.03);
+  }
+}
+
 TEST(SphStage, FluidOnlyCloudConservesMomentum) {
   // A free fluid block without walls or gravity, random velocities: the stage's total
   // momentum stays constant to round-off over many steps (re-sorting included).
@@ -252,6 +330,22 @@ fluid:
     FAIL() << "a block with max.x <= min.x must be refused";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("fluid.blocks.0.max.0"), std::string::npos) << e.what();
+  }
+  const std::string base =
+      "run: {end_time: 0.1}\ngravity: [0, -9.81, 0]\nfluid: {spacing: 0.02, blocks: [{min: [0, 0, 0], "
+      "max: [0.2, 0.1, 0.04]}], ";
+  EXPECT_EQ(parse_scene(base + "periodic_z: [0, 0.04]}\n", "p.yaml", {}).fluid.periodic_z->at(1), 0.04);
+  for (const auto& [bad, expect] :
+       std::vector<std::pair<std::string, std::string>>{
+           {"periodic_z: [0, 0.05]}", "fluid.periodic_z: z1 - z0 must be a whole number of spacings"},
+           {"periodic_z: [0, 0.02]}", "fluid.blocks.0: must lie within fluid.periodic_z in z"},
+           {"periodic_z: [0.04, 0]}", "fluid.periodic_z.1: must be > z0"}}) {
+    try {
+      parse_scene(base + bad + "\n", "bad.yaml", {});
+      FAIL() << bad << " must be refused";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expect), std::string::npos) << e.what();
+    }
   }
 }
 
