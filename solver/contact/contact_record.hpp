@@ -37,4 +37,29 @@ QDEMSPH_HD std::uint64_t contact_key1(int type, std::uint64_t id1) {
   return (static_cast<std::uint64_t>(type) << 60) | id1;
 }
 
+// The slot of the record's anchor vertex: in a distributed run the rank owning it evaluates
+// the record (once over the ranks) and keeps its history. A point-face or wall record's side-1
+// vertex when it is free (the duplicate filter compares one vertex's point-face hits on one
+// body, so they stay together), else the free vertex with the smallest global id; -1 when
+// no vertex is free. v: the record's vertex ids (-1: unused); vs.free(id), vs.gid(id).
+template <class Id, class Vertices>
+QDEMSPH_HD int anchor_slot(int type, const Id* v, const Vertices& vs) {
+  if (type != kEdgeEdge && v[0] >= 0 && vs.free(v[0])) return 0;
+  int best = -1;
+  for (int k = 0; k < 4; ++k)
+    if (v[k] >= 0 && vs.free(v[k]) && (best < 0 || vs.gid(v[k]) < vs.gid(v[best]))) best = k;
+  return best;
+}
+
+// A contact force share for a vertex another rank owns (a distributed run): the record's key,
+// the vertex's slot in it and the force; `vertex` is a local index in a rank's model and a
+// global id between ranks (FeatureIds::to_global / to_local translate the key and the vertex).
+// The owner sums its vertex's shares with its own in key, then slot order: the one-rank order.
+struct ContactShare {
+  std::uint64_t k1 = 0, k2 = 0;
+  std::int64_t vertex = -1;
+  std::int32_t slot = 0;
+  Vec3 f;
+};
+
 }  // namespace qdemsph

@@ -19,8 +19,11 @@
 //     D_DEM at the two surface points, tangential history looked up by key (binary search
 //     in the previous step's sorted keys), force distributed by weights (a gap below -D_DEM
 //     counts only for a feature pair that was in contact the step before: the back face of
-//     a thin body is not a penetration); a per-vertex gather
-//     (count, scan, fill, segment sort) adds it to f in a fixed order (deterministic);
+//     a thin body is not a penetration); a per-vertex gather (add_forces: count, scan, fill,
+//     segment sort by record key, then slot) adds it to f in a fixed order (deterministic);
+//     on an MPI rank, which evaluates only the records anchored at its owned vertices
+//     (Evaluator), the shares of other ranks' vertices leave by shares() and arrive at their
+//     owners' add_forces, which sort them in among their own entries: the one-rank order;
 //  4. energy: the springs' stored energy and the step's dissipation per contact
 //     (physics/contact_law.hpp, contact_energy; the non-potential force h is history like the
 //     spring), plus, for touches that ended, their spring energy and the second half of their
@@ -56,6 +59,22 @@
 
 namespace qdemsph {
 
+// Whether this process evaluates a record: it owns (index < n_free_vertices) the record's
+// anchor vertex (contact_record.hpp, anchor_slot). Every record on one process; on MPI ranks
+// exactly one rank evaluates a record (the narrow phase skips or drops the others').
+struct Evaluator {
+  View<const std::uint64_t> vgid;
+  View<const std::int32_t> vertex_body, body_fixed;
+  std::int64_t nfv = 0;
+  QDEMSPH_HD bool free(int i) const { return !body_fixed[vertex_body[i]]; }
+  QDEMSPH_HD std::uint64_t gid(int i) const { return vgid[i]; }
+  QDEMSPH_HD bool owns(int type, const std::int32_t* v) const {
+    const int k = anchor_slot(type, v, *this);
+    return k >= 0 && v[k] < nfv;
+  }
+};
+static_assert(std::is_trivially_copyable_v<Evaluator>);
+
 // Read-only topology views used by the narrow phase (trivially copyable).
 struct ContactTopology {
   View<const std::int32_t> tri_v;  // tri_v[k * ntri + s]
@@ -69,6 +88,7 @@ struct ContactTopology {
   View<const double> body_h;
   double d_dem = 0;
   bool self_contact = false;
+  Evaluator eval;  // feature pairs another rank evaluates are skipped
 
   QDEMSPH_HD int tri_vertex(std::int64_t s, int k) const { return tri_v[k * ntri + s]; }
   QDEMSPH_HD Vec3 edge_normal(int e) const {
@@ -85,6 +105,9 @@ struct ContactTopology {
   // accepted gaps by more than round-off, and two edges whose midpoints are farther apart
   // than their half-lengths plus D_DEM (a valid edge-edge touch has |d| = |p - q| < D_DEM).
   // The exact tests decide every other case, so the records are those of testing everything.
+  // On an MPI rank, a free vertex's point-face tests run on its owner only and an edge pair's
+  // on its anchor's owner (anchor_slot); a fixed vertex's run wherever both sides are held
+  // (the duplicate filter needs all of them), the narrow phase keeps the anchor owner's record.
   template <class Emit>
   QDEMSPH_HD void narrow_tris(Vec3CView x, std::int64_t a, std::int64_t b, Emit&& emit) const {
     const int ba = tri_body[a], bb = tri_body[b];
@@ -105,6 +128,7 @@ struct ContactTopology {
       for (std::int64_t q = own_v_off[s1]; q < own_v_off[s1 + 1]; ++q) {
         const int A = own_v[q];
         if (same && tri_has(s2, A)) continue;
+        if (eval.free(A) && A >= eval.nfv) continue;  // its owner tests a free vertex's touches
         const Vec3 xa = x[A];
         const double s_est = dot(xa - p2[0], n2);
         if (s_est > d_dem + tol || s_est < -pen - tol) continue;
@@ -136,6 +160,8 @@ struct ContactTopology {
         const int e1 = swap ? eb : ea, e2 = swap ? ea : eb;
         const int a0 = edge_v[e1], a1 = edge_v[ne + e1], b0 = edge_v[e2], b1 = edge_v[ne + e2];
         if (same && (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1)) continue;
+        const std::int32_t ends[4] = {a0, a1, b0, b1};
+        if (!eval.owns(kEdgeEdge, ends)) continue;
         const Vec3 xa0 = x[a0], xa1 = x[a1], xb0 = x[b0], xb1 = x[b1];
         const double reach = 0.5 * (norm(xa1 - xa0) + norm(xb1 - xb0)) + d_dem + tol;
         if (norm2(0.5 * ((xa0 + xa1) - (xb0 + xb1))) > reach * reach) continue;
@@ -178,23 +204,31 @@ struct AppendRecord {
   }
 };
 
-// Whether this process counts a record's energy: it owns (index < n_free_vertices) the
-// record's free-body vertex with the smallest global id. Always on one process; on MPI ranks,
-// which evaluate a pair across a border on each side, exactly one rank counts it.
-struct EnergyOwner {
-  View<const std::uint64_t> vgid;
-  View<const std::int32_t> vertex_body, body_fixed;
-  std::int64_t nfv = 0;
-  QDEMSPH_HD bool operator()(const ContactRecord& r) const {
-    int best = -1;
-    for (int k = 0; k < 4; ++k) {
-      const int i = r.v[k];
-      if (i < 0 || body_fixed[vertex_body[i]]) continue;
-      if (best < 0 || vgid[i] < vgid[best]) best = i;
-    }
-    return best >= 0 && best < nfv;
+// The contact entries a vertex sums: e < nl the local ones (record e / 4, slot e % 4: the
+// records are sorted by key), then the shares other ranks sent. before(a, b): by record key,
+// then slot, the order of one process.
+struct ContactEntries {
+  std::int64_t nl = 0;
+  View<const int> v;
+  Vec3CView f;
+  View<const std::uint64_t> k1, k2;
+  View<const ContactShare> in;
+  QDEMSPH_HD int vertex(std::int64_t e) const {
+    return e < nl ? v[e] : static_cast<int>(in[e - nl].vertex);
+  }
+  QDEMSPH_HD Vec3 force(std::int64_t e) const { return e < nl ? f[e] : in[e - nl].f; }
+  QDEMSPH_HD bool before(std::int64_t a, std::int64_t b) const {
+    if (a < nl && b < nl) return a < b;
+    const std::uint64_t a1 = a < nl ? k1[a / 4] : in[a - nl].k1,
+                        b1 = b < nl ? k1[b / 4] : in[b - nl].k1;
+    if (a1 != b1) return a1 < b1;
+    const std::uint64_t a2 = a < nl ? k2[a / 4] : in[a - nl].k2,
+                        b2 = b < nl ? k2[b / 4] : in[b - nl].k2;
+    if (a2 != b2) return a2 < b2;
+    return (a < nl ? a % 4 : in[a - nl].slot) < (b < nl ? b % 4 : in[b - nl].slot);
   }
 };
+static_assert(std::is_trivially_copyable_v<ContactEntries>);
 
 template <class Exec>
 class ContactStage {
@@ -274,6 +308,8 @@ class ContactStage {
     }
     vgid_.assign(vgid);
     inv_mass_.assign(m.inv_mass);
+    ghosts_ = false;  // free vertices other ranks own (a distributed run's rank)
+    for (std::int64_t i = nfv_; i < nv_; ++i) ghosts_ = ghosts_ || !c.body_fixed[m.body[i]];
     pc_.resize(np_);
     pr_.resize(np_);
     pc_ref_.resize(np_);
@@ -286,13 +322,15 @@ class ContactStage {
     n_prev_ = 0;
   }
 
-  // f[i] += contact force on vertex i, for free vertices i < n_free_vertices. dt > 0 advances
-  // the tangential springs (dynamics); dt = 0 leaves them (relaxation, the first evaluation).
-  // Timers accumulate for dynamic steps only (dt > 0: inside the stepper's "elements" phase),
-  // so run_scene can report "elements" without contact.
-  void add_forces(Vec3CView x, Vec3CView v, Vec3View f, double dt) {
+  // The contact records at positions x and velocities v: pairs, records, the force law, the
+  // history and energies; add_forces then adds the forces. dt > 0 advances the tangential
+  // springs (dynamics); dt = 0 leaves them (relaxation, the first evaluation). Timers
+  // accumulate for dynamic steps only (dt > 0: inside the stepper's "elements" phase), so
+  // run_scene can report "elements" without contact.
+  void evaluate(Vec3CView x, Vec3CView v, double dt) {
+    timed_ = dt > 0;
     PhaseTimers scratch;
-    PhaseTimers& tm = dt > 0 ? timers_ : scratch;
+    PhaseTimers& tm = timed_ ? timers_ : scratch;
     std::int64_t npairs = 0;
     {
       auto scope = tm.scope("contact.broad");
@@ -305,11 +343,64 @@ class ContactStage {
     }
     {
       auto scope = tm.scope("contact.force");
-      forces(x, v, f, dt, nc);
+      forces(v, dt, nc);
     }
     stats_.pairs = npairs;
     stats_.contacts = nc;
     ++steps_;
+  }
+
+  // The last evaluation's force shares of free vertices held but not owned (an MPI rank's
+  // ghosts; none on one process), keys and vertices in this model's ids, in no fixed order.
+  std::vector<ContactShare> shares() {
+    if (!ghosts_) return {};
+    const std::int64_t ne = 4 * n_prev_;
+    const auto evc = ent_v_.cview();
+    const auto efc = ent_f_.cview();
+    const auto k1 = pk1_.cview(), k2 = pk2_.cview();
+    const Evaluator ev = evaluator();
+    std::int64_t n = 0;
+    for (int pass = 0; pass < 2; ++pass) {  // as narrow_phase: again with room for all
+      count_.zero();
+      ContactShare* out = out_.view().p;
+      int* count = count_.view().p;
+      const std::int64_t cap = out_.size();
+      for_each(
+          Exec{}, ne, QDEMSPH_LAMBDA(std::int64_t e) {
+            const int i = evc[e];
+            if (i < ev.nfv || !ev.free(i)) return;
+            const int k = atomic_inc(count);
+            if (k >= cap) return;
+            ContactShare s;
+            s.k1 = k1[e / 4];
+            s.k2 = k2[e / 4];
+            s.vertex = i;
+            s.slot = static_cast<std::int32_t>(e % 4);
+            s.f = efc[e];
+            out[k] = s;
+          });
+      n = read_back(count_, 0);
+      if (n <= out_.size()) break;
+      out_.resize(n + n / 4 + 64);
+    }
+    std::vector<ContactShare> h(n);
+    if (n > 0) space_copy(h.data(), Space::Host, out_.cview().p, S, sizeof(ContactShare) * n);
+    return h;
+  }
+
+  // f[i] += contact force on vertex i, for free vertices i < n_free_vertices, of the last
+  // evaluation and of `in`: shares other ranks evaluated (keys and vertices in this model's
+  // ids). Each vertex sums its entries sorted by record key, then slot: the one-rank order
+  // (deterministic, no atomics in the sums).
+  void add_forces(Vec3View f, const std::vector<ContactShare>& in = {}) {
+    PhaseTimers scratch;
+    auto scope = (timed_ ? timers_ : scratch).scope("contact.force");
+    const auto nin = static_cast<std::int64_t>(in.size());
+    if (in_.size() < nin) in_.resize(nin + nin / 4 + 64);  // grows only: no allocation per step
+    if (nin > 0) space_copy(in_.view().p, S, in.data(), Space::Host, sizeof(ContactShare) * nin);
+    const std::int64_t ne = 4 * n_prev_ + nin;
+    if (vent_.size() < ne) vent_.resize(ne + ne / 4 + 64);
+    gather(f, ne);
   }
 
   // The state between steps (contact_state.hpp): the whole history of the last force
@@ -399,12 +490,10 @@ class ContactStage {
   // Elastic energy in the contact springs now (normal + tangential, last force evaluation).
   double stored_energy() const {
     const auto en = pen_.cview();
-    const auto rec = rec_.cview();
-    const EnergyOwner counts = energy_owner();
     return reduce_sum(
-        Exec{}, n_prev_, QDEMSPH_LAMBDA(std::int64_t c) { return counts(rec[c]) ? en[c] : 0.0; });
+        Exec{}, n_prev_, QDEMSPH_LAMBDA(std::int64_t c) { return en[c]; });
   }
-  EnergyOwner energy_owner() const {
+  Evaluator evaluator() const {
     return {vgid_.cview(), vertex_body_.cview(), body_fixed_.cview(), nfv_};
   }
   // Energy dissipated by the contact dashpots and Coulomb slip since the start [J].
@@ -422,7 +511,8 @@ class ContactStage {
            pk1_.bytes() + pk2_.bytes() + pxi_.bytes() + nk1_.bytes() + nk2_.bytes() + nxi_.bytes() +
            pen_.bytes() + pet_.bytes() + nen_.bytes() + net_.bytes() + ediss_.bytes() +
            ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() + pr_ref_.bytes() +
-           cells_.bytes() + pairs_.bytes() + vgid_.bytes();
+           cells_.bytes() + pairs_.bytes() + vgid_.bytes() + rec_tmp_.bytes() + in_.bytes() +
+           out_.bytes() + keep_.bytes();
   }
 
   ContactTopology topology() const {
@@ -444,6 +534,7 @@ class ContactStage {
     t.vgid = vgid_.cview();
     t.d_dem = d_dem_;
     t.self_contact = self_;
+    t.eval = evaluator();
     return t;
   }
 
@@ -547,12 +638,23 @@ class ContactStage {
     const auto fixed = body_fixed_.cview();
     const bool self = self_;
     const auto pvv = pv;
+    const std::int64_t nfv = nfv_;
     // Only primitives of free bodies start a pair (they come first): a fixed-fixed pair is
-    // never needed, and a free-fixed pair (i < npf <= j) is found from its free side.
+    // never needed, and a free-fixed pair (i < npf <= j) is found from its free side. On an
+    // MPI rank a pair of two free primitives without an owned vertex is another rank's
+    // (every record it could give is anchored elsewhere, Evaluator).
     return pairs_.build(
         cells_, cc, rr, gap, npf_, QDEMSPH_LAMBDA(std::int64_t i, std::int64_t j)->bool {
           const int bi = pb[i], bj = pb[j];
           if (fixed[bi] && fixed[bj]) return false;
+          if (!fixed[bj]) {
+            bool owned = false;
+            for (int a = 0; a < 8 && !owned; ++a) {
+              const int va = pvv[(a & 3) * np + (a < 4 ? i : j)];
+              owned = va >= 0 && va < nfv;
+            }
+            if (!owned) return false;
+          }
           if (bi != bj) return true;
           if (!self) return false;
           // Self-contact: primitives sharing a vertex are neighbours in the mesh, not a touch.
@@ -566,8 +668,9 @@ class ContactStage {
         });
   }
 
-  // Records of all contacts, sorted by key, duplicates of one touch deactivated. The previous
-  // step's records move to prec_ (the energy of touches that ended needs them).
+  // Records of all contacts, sorted by key, duplicates of one touch deactivated; on an MPI rank
+  // only those it evaluates (Evaluator). The previous step's records move to prec_ (the energy
+  // of touches that ended needs them).
   std::int64_t narrow_phase(Vec3CView x) {
     std::swap(rec_, prec_);
     {
@@ -652,15 +755,13 @@ class ContactStage {
             if (rec[o].body2 == r.body2 && rec[o].d > r.d) keep = false;
           r.active = keep ? 1 : 0;
         });
-    return nc;
+    return ghosts_ ? keep_evaluated(nc) : nc;
   }
 
-  void forces(Vec3CView x, Vec3CView v, Vec3View f, double dt, std::int64_t nc) {
-    (void)x;
+  void forces(Vec3CView v, double dt, std::int64_t nc) {
     if (ent_v_.size() < 4 * nc) {
       ent_v_.resize(4 * nc + nc + 64);
       ent_f_.resize(4 * nc + nc + 64);
-      vent_.resize(4 * nc + nc + 64);
     }
     if (nk1_.size() < nc) {
       nact_.resize(nc + nc / 4 + 64);
@@ -782,11 +883,10 @@ class ContactStage {
       const auto ed = ediss_.cview();
       const auto prec = prec_.cview();
       const std::int64_t ncur = nc;
-      const EnergyOwner counts = energy_owner();
       dissipated_ += reduce_sum(
           Exec{}, nc > nprev ? nc : nprev, QDEMSPH_LAMBDA(std::int64_t i) {
-            double s = i < ncur && counts(rec[i]) ? ed[i] : 0.0;
-            if (i < nprev && pact[i] && counts(prec[i])) {
+            double s = i < ncur ? ed[i] : 0.0;
+            if (i < nprev && pact[i]) {
               std::int64_t lo = 0, hi = ncur;
               while (lo < hi) {
                 const std::int64_t mid = (lo + hi) / 2;
@@ -817,43 +917,6 @@ class ContactStage {
     std::swap(ph_, nh_);
     n_prev_ = nc;
 
-    // Gather per vertex: count, scan, fill, sort each vertex's entries, sum.
-    const std::int64_t nv = nv_, ne4 = 4 * nc;
-    const auto vcnt = vcnt_.view();
-    const auto vcur = vcur_.view();
-    const auto vent = vent_.view();
-    const auto evc = ent_v_.cview();
-    const auto efc = ent_f_.cview();
-    (void)nv;
-    vcnt_.zero();  // memset: no parallel region for a loop without work
-    vcur_.zero();
-    for_each(
-        Exec{}, ne4, QDEMSPH_LAMBDA(std::int64_t e) {
-          if (evc[e] >= 0) atomic_inc(&vcnt[evc[e]]);
-        });
-    exclusive_scan(Exec{}, vcnt, nv);
-    for_each(
-        Exec{}, ne4, QDEMSPH_LAMBDA(std::int64_t e) {
-          const int i = evc[e];
-          if (i >= 0) vent[vcnt[i] + atomic_inc(&vcur[i])] = static_cast<int>(e);
-        });
-    for_each(
-        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-          const int b = vcnt[i], e = vcnt[i + 1];
-          if (b == e) return;
-          for (int k = b + 1; k < e; ++k) {  // insertion sort: a vertex has few entries
-            const int val = vent[k];
-            int j = k - 1;
-            while (j >= b && vent[j] > val) {
-              vent[j + 1] = vent[j];
-              --j;
-            }
-            vent[j + 1] = val;
-          }
-          Vec3 s{};
-          for (int k = b; k < e; ++k) s += efc[vent[k]];
-          f.set(i, f[i] + s);
-        });
     const auto pxc = rec_.cview();
     const auto act = pact_.cview();  // this step's, after the swap
     stats_.active = static_cast<std::int64_t>(reduce_sum(
@@ -886,6 +949,65 @@ class ContactStage {
     }
   }
 
+  // Gather per vertex: count, scan, fill, sort each vertex's entries, sum.
+  void gather(Vec3View f, std::int64_t ne) {
+    const ContactEntries ent{4 * n_prev_,  ent_v_.cview(), ent_f_.cview(),
+                             pk1_.cview(), pk2_.cview(),   in_.cview()};
+    const auto vcnt = vcnt_.view();
+    const auto vcur = vcur_.view();
+    const auto vent = vent_.view();
+    vcnt_.zero();  // memset: no parallel region for a loop without work
+    vcur_.zero();
+    for_each(
+        Exec{}, ne, QDEMSPH_LAMBDA(std::int64_t e) {
+          const int i = ent.vertex(e);
+          if (i >= 0) atomic_inc(&vcnt[i]);
+        });
+    exclusive_scan(Exec{}, vcnt, nv_);
+    for_each(
+        Exec{}, ne, QDEMSPH_LAMBDA(std::int64_t e) {
+          const int i = ent.vertex(e);
+          if (i >= 0) vent[vcnt[i] + atomic_inc(&vcur[i])] = static_cast<int>(e);
+        });
+    for_each(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+          const int b = vcnt[i], e = vcnt[i + 1];
+          if (b == e) return;
+          for (int k = b + 1; k < e; ++k) {  // insertion sort: a vertex has few entries
+            const int val = vent[k];
+            int j = k - 1;
+            while (j >= b && ent.before(val, vent[j])) {
+              vent[j + 1] = vent[j];
+              --j;
+            }
+            vent[j + 1] = val;
+          }
+          Vec3 s{};
+          for (int k = b; k < e; ++k) s += ent.force(vent[k]);
+          f.set(i, f[i] + s);
+        });
+  }
+
+  // Drops the records another rank evaluates (a fixed vertex's point-face hits: tested wherever
+  // both sides are held, so that the duplicate filter sees them all); the key order stays.
+  std::int64_t keep_evaluated(std::int64_t nc) {
+    if (keep_.size() < nc + 1) keep_.resize(nc + nc / 4 + 64);
+    if (rec_tmp_.size() < nc) rec_tmp_.resize(nc + nc / 4 + 64);
+    const auto rec = rec_.cview();
+    const auto keep = keep_.view();
+    const Evaluator ev = evaluator();
+    for_each(
+        Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) { keep[c] = ev.owns(rec[c].type, rec[c].v); });
+    const std::int64_t n = exclusive_scan(Exec{}, keep, nc);
+    const auto out = rec_tmp_.view();
+    for_each(
+        Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
+          if (keep[c + 1] > keep[c]) out[keep[c]] = rec[c];
+        });
+    std::swap(rec_, rec_tmp_);
+    return n;
+  }
+
   // The contact flagged by the penetration guard since the last call, if any (clears it).
   // Vertex and body indices are the uploaded model's.
   std::optional<DeepContact> take_deep_contact() {
@@ -900,7 +1022,7 @@ class ContactStage {
   std::int64_t nv_ = 0, nfv_ = 0, ntri_ = 0, ne_ = 0, np_ = 0, npf_ = 0, nwv_ = 0, nw_ = 0,
                n_prev_ = 0;
   double d_dem_ = 0, kn_factor_ = 0.1, kt_ratio_ = 2.0 / 7.0;
-  bool self_ = false;
+  bool self_ = false, ghosts_ = false;
   int nm_ = 0;
   Vec3Buffer tri_n_{S};
   Buffer<std::int32_t> edge_tri_{S};
@@ -913,7 +1035,10 @@ class ContactStage {
   Vec3Buffer pc_{S};
   CellList<Exec> cells_;
   CandidatePairs<Exec> pairs_;
-  Buffer<ContactRecord> rec_{S};
+  Buffer<ContactRecord> rec_{S}, rec_tmp_{S};
+  Buffer<ContactShare> in_{S}, out_{S};  // shares received and to send (add_forces, shares)
+  Buffer<int> keep_{S};
+  bool timed_ = false;  // the last evaluation was a dynamic step
   Buffer<int> ent_v_{S}, vcnt_{S}, vcur_{S}, vent_{S}, count_{S};
   Vec3Buffer ent_f_{S};
   Buffer<std::uint64_t> pk1_{S}, pk2_{S}, nk1_{S}, nk2_{S};

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "contact/contact_record.hpp"
 #include "contact/contact_state.hpp"
 #include "core/memory.hpp"
 #include "core/vec.hpp"
@@ -104,11 +105,16 @@ class Backend {
   virtual std::map<std::string, double> contact_stats() const { return {}; }
 
   // ---- Used by distributed runs (parallel/distributed_backend.hpp) -----------------------
-  // compute_forces = element_forces(0, n_free_tets) + assemble_forces: the element forces of
-  // tets [t0, t1) into the corner array, then the gather to vertices, loads, damping and
-  // contact, so that a halo exchange can overlap the tets whose vertices are all owned.
+  // compute_forces = element_forces(0, n_free_tets) + assemble_forces + add_contact_forces({}):
+  // the element forces of tets [t0, t1) into the corner array, then the gather to vertices,
+  // loads, damping and the contact evaluation, then the contact forces, so that a halo
+  // exchange can overlap the tets whose vertices are all owned and the contact force shares
+  // of other ranks' vertices (contact_shares(), contact_stage.hpp) can reach their owners,
+  // whose add_contact_forces merges them in the one-rank order.
   virtual void element_forces(std::int64_t t0, std::int64_t t1, double dt_dissipation) = 0;
   virtual void assemble_forces(double dt_dissipation, double mass_damping) = 0;
+  virtual std::vector<ContactShare> contact_shares() = 0;
+  virtual void add_contact_forces(const std::vector<ContactShare>& in) = 0;
   // Halo exchange of x and v by index lists, packed where the data lives (on the GPU for
   // CUDA): pack_halo writes 6 doubles (x, v) per entry of send_index, item-major, to host
   // memory `out`; unpack_halo reads n_recv such records into vertices recv_base + k.

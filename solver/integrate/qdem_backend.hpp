@@ -98,6 +98,7 @@ class QdemBackend final : public Backend {
   void compute_forces(double dt_diss, double alpha) override {
     element_forces(0, nft_, dt_diss);
     assemble_forces(dt_diss, alpha);
+    add_contact_forces({});
   }
 
   void element_forces(std::int64_t t0, std::int64_t t1, double dt_diss) override {
@@ -154,7 +155,13 @@ class QdemBackend final : public Backend {
           }
           f.set(i, s);
         });
-    if (contact_) contact_->add_forces(x_.cview(), v_.cview(), f_.view(), dt_diss);
+    if (contact_) contact_->evaluate(x_.cview(), v_.cview(), dt_diss);
+  }
+  std::vector<ContactShare> contact_shares() override {
+    return contact_ ? contact_->shares() : std::vector<ContactShare>{};
+  }
+  void add_contact_forces(const std::vector<ContactShare>& in) override {
+    if (contact_) contact_->add_forces(f_.view(), in);
   }
 
   // The contact stage (null when the model needs none), for tests and diagnostics.

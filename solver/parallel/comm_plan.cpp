@@ -186,6 +186,60 @@ void CommEngine::finish(std::span<const CommField> dst, Dir dir) {
   seconds_.unpack += MPI_Wtime() - t1;
 }
 
+std::vector<std::byte> CommEngine::exchange(std::span<const std::byte> send,
+                                            std::span<const std::int64_t> send_off,
+                                            std::size_t stride) {
+  if (in_flight_) throw std::logic_error("comm plan: exchange() while an exchange is in flight");
+  if (static_cast<int>(send_off.size()) != size_ + 1 ||
+      static_cast<std::size_t>(send_off[size_]) * stride != send.size())
+    throw std::invalid_argument("comm plan: exchange() needs size() + 1 offsets over the records");
+  const auto is_nbr = [&](int r) { return std::binary_search(nbrs_.begin(), nbrs_.end(), r); };
+  for (int r = 0; r < size_; ++r)
+    if (send_off[r + 1] > send_off[r] && r != rank_ && !is_nbr(r))
+      throw std::invalid_argument("comm plan: exchange() to rank " + std::to_string(r) +
+                                  ", not a neighbour");
+  // Counts, then the records.
+  const std::size_t nn = nbrs_.size();
+  std::vector<std::int64_t> scount(nn), rcount(nn);
+  std::vector<MPI_Request> req;
+  req.reserve(2 * nn);
+  for (std::size_t k = 0; k < nn; ++k) {
+    scount[k] = send_off[nbrs_[k] + 1] - send_off[nbrs_[k]];
+    req.emplace_back();
+    MPI_Irecv(&rcount[k], 1, MPI_INT64_T, nbrs_[k], kTag + 1, comm_, &req.back());
+    req.emplace_back();
+    MPI_Isend(&scount[k], 1, MPI_INT64_T, nbrs_[k], kTag + 1, comm_, &req.back());
+  }
+  MPI_Waitall(static_cast<int>(req.size()), req.data(), MPI_STATUSES_IGNORE);
+  std::vector<std::int64_t> roff(size_ + 1, 0);
+  for (int r = 0; r < size_; ++r) roff[r + 1] = r == rank_ ? send_off[r + 1] - send_off[r] : 0;
+  for (std::size_t k = 0; k < nn; ++k) roff[nbrs_[k] + 1] = rcount[k];
+  for (int r = 0; r < size_; ++r) roff[r + 1] += roff[r];
+  std::vector<std::byte> out(roff[size_] * stride);
+  req.clear();
+  last_bytes_ = 0;
+  for (std::size_t k = 0; k < nn; ++k) {
+    const int r = nbrs_[k];
+    if (rcount[k] > 0) {
+      req.emplace_back();
+      MPI_Irecv(out.data() + roff[r] * stride, as_count(rcount[k] * stride), MPI_BYTE, r, kTag + 2,
+                comm_, &req.back());
+    }
+    if (scount[k] > 0) {
+      req.emplace_back();
+      MPI_Isend(send.data() + send_off[r] * stride, as_count(scount[k] * stride), MPI_BYTE, r,
+                kTag + 2, comm_, &req.back());
+      last_bytes_ += scount[k] * stride;
+    }
+  }
+  if (roff[rank_ + 1] > roff[rank_])
+    std::memcpy(out.data() + roff[rank_] * stride, send.data() + send_off[rank_] * stride,
+                (roff[rank_ + 1] - roff[rank_]) * stride);
+  MPI_Waitall(static_cast<int>(req.size()), req.data(), MPI_STATUSES_IGNORE);
+  total_bytes_ += last_bytes_;
+  return out;
+}
+
 MigratePlan::MigratePlan(MPI_Comm comm, std::span<const int> dest,
                          std::span<const std::uint64_t> gid)
     : n_old_(static_cast<std::int64_t>(dest.size())) {

@@ -112,6 +112,13 @@ class CommEngine {
   void begin_packed();
   std::span<const std::byte> finish_packed();
 
+  // Variable-length exchange with the neighbours() (blocking; none in flight): records of
+  // `stride` bytes in `send`, grouped by destination rank by send_off (size() + 1 entries);
+  // every destination must be a neighbour or this rank. Returns the records received, by
+  // source rank, then sender order. last_bytes() becomes the bytes sent.
+  std::vector<std::byte> exchange(std::span<const std::byte> send,
+                                  std::span<const std::int64_t> send_off, std::size_t stride);
+
   std::int64_t n_send() const { return static_cast<std::int64_t>(send_index_.size()); }
   std::int64_t n_recv() const { return recv_off_.back(); }
   std::int64_t recv_base() const { return recv_base_; }

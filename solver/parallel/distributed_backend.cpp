@@ -126,6 +126,13 @@ void for_each_band_neighbour(const BandCell& c, F f) {
       for (int d = -2; d <= 2; ++d) f(band_key(c.i[0] + a, c.i[1] + b, c.i[2] + d));
 }
 
+// Free and global ids of the global model's vertices for anchor_slot (fixed: no owner).
+struct GlobalVertices {
+  const std::vector<std::int32_t>& owner;
+  bool free(std::int64_t i) const { return owner[i] >= 0; }
+  std::int64_t gid(std::int64_t i) const { return i; }
+};
+
 struct VertexRecord {
   std::int64_t gid;
   double x[3], v[3];
@@ -228,13 +235,24 @@ class DistributedImpl final : public DistributedBackend {
       auto s = timers_.scope("halo");
       const auto in = e.finish_packed();
       local_->unpack_halo(reinterpret_cast<const double*>(in.data()));
+      halo_bytes_ += e.last_bytes();
     }
+    std::vector<ContactShare> out;
     {
       auto s = timers_.scope("elements");
       local_->element_forces(L_.n_interior, static_cast<std::int64_t>(L_.tets.size()), dt_diss);
       local_->assemble_forces(dt_diss, alpha);
+      out = local_->contact_shares();
     }
-    halo_bytes_ += e.last_bytes();
+    std::vector<ContactShare> in;
+    if (contact_) {
+      auto s = timers_.scope("halo");
+      in = exchange_shares(out);
+    }
+    {
+      auto s = timers_.scope("elements");
+      local_->add_contact_forces(in);
+    }
     ++exchanges_;
   }
 
@@ -266,8 +284,8 @@ class DistributedImpl final : public DistributedBackend {
   }
 
   Energies energies() override {
-    // Each rank counts its home tets, owned vertices and the contacts whose smallest free
-    // vertex it owns (contact_stage.hpp, EnergyOwner): every item once over the ranks.
+    // Each rank counts its home tets, owned vertices and the contact records it evaluates
+    // (contact_stage.hpp, Evaluator): every item once over the ranks.
     const Energies e = local_->energies();
     double a[6] = {e.kinetic, e.strain, e.potential, e.dissipated, e.contact, e.contact_dissipated};
     allreduce_sum_same(comm_, a, 6);
@@ -388,7 +406,8 @@ class DistributedImpl final : public DistributedBackend {
     return {{keys[0], mx[0]}, {keys[1], mx[1]}, {keys[2], mx[2]}};
   }
 
-  // Counts summed over ranks (a pair across a border is counted on each rank evaluating it),
+  // Counts summed over ranks (records and active ones: each once; candidate pairs of
+  // primitives near a border on each rank holding them),
   // overlaps the largest.
   std::map<std::string, double> contact_stats() const override {
     if (!contact_) return {};
@@ -408,6 +427,10 @@ class DistributedImpl final : public DistributedBackend {
     unsupported("element_forces");
   }
   void assemble_forces(double, double) override { unsupported("assemble_forces"); }
+  std::vector<ContactShare> contact_shares() override { unsupported("contact_shares"); }
+  void add_contact_forces(const std::vector<ContactShare>&) override {
+    unsupported("add_contact_forces");
+  }
   void set_halo(const std::vector<std::int64_t>&, std::int64_t, std::int64_t) override {
     unsupported("set_halo");
   }
@@ -482,21 +505,16 @@ class DistributedImpl final : public DistributedBackend {
       s.tet.push_back(L_.tets[j]);
       s.diss_t.push_back(st.diss_t[j]);
     }
-    // Each history entry once: from the owner of its free vertex with the smallest id (that
-    // rank holds the pair's whole neighbourhood, so its entry is the right one).
+    // Each history entry once: a rank holds the history of the records it evaluates only
+    // (those anchored at its owned vertices, contact_record.hpp anchor_slot).
     if (!st.contact) return s;
     const ContactState& c = *st.contact;
-    s.contact.dissipated = c.dissipated;  // this rank's share (EnergyOwner)
+    s.contact.dissipated = c.dissipated;  // this rank's share: its records' dissipation
     for (std::size_t e = 0; e < c.size(); ++e) {
       if (!c.active[e]) continue;  // an inactive entry is never looked up
       std::array<std::int64_t, 4> kv{-1, -1, -1, -1};
-      std::int64_t first = -1;
-      for (int k = 0; k < 4; ++k) {
-        if (c.v[e][k] < 0) continue;
-        kv[k] = L_.vertices[c.v[e][k]];
-        if (owner_[kv[k]] >= 0 && (first < 0 || kv[k] < first)) first = kv[k];
-      }
-      if (first < 0 || owner_[first] != me_) continue;
+      for (int k = 0; k < 4; ++k)
+        if (c.v[e][k] >= 0) kv[k] = L_.vertices[c.v[e][k]];
       s.contact.push_back(c, e);
       s.contact.k1.back() = ids_.k1_to_global(c.k1[e]);
       s.contact.k2.back() = ids_.k2_to_global(c.k1[e], c.k2[e]);
@@ -638,6 +656,32 @@ class DistributedImpl final : public DistributedBackend {
     for (const auto& [k, v] : local_stage_seconds())
       if (k.rfind("contact.", 0) == 0) c += v;
     return c;
+  }
+
+  // The contact force shares of ghost vertices (this rank evaluated their records) to the
+  // vertices' owners, in global ids on the way; returns the shares other ranks evaluated for
+  // owned vertices, in this rank's ids. Over the halo plan's neighbours: a ghost's owner is one.
+  std::vector<ContactShare> exchange_shares(const std::vector<ContactShare>& out) {
+    std::vector<std::int64_t> off(np_ + 1, 0);
+    for (const ContactShare& s : out) ++off[owner_[L_.vertices[s.vertex]] + 1];
+    for (int r = 0; r < np_; ++r) off[r + 1] += off[r];
+    std::vector<std::int64_t> fill(off.begin(), off.end() - 1);
+    std::vector<ContactShare> send(out.size());
+    for (const ContactShare& s : out)
+      send[fill[owner_[L_.vertices[s.vertex]]]++] = ids_.to_global(s);
+    CommEngine& e = halo_->engine();
+    const std::vector<std::byte> got =
+        e.exchange(std::as_bytes(std::span(send)), off, sizeof(ContactShare));
+    halo_bytes_ += e.last_bytes();
+    std::vector<ContactShare> in(got.size() / sizeof(ContactShare));
+    if (!in.empty()) std::memcpy(in.data(), got.data(), got.size());
+    for (ContactShare& s : in) {
+      s = ids_.to_local(s);
+      if (s.vertex >= L_.n_owned)
+        throw std::logic_error("contact share for vertex " + std::to_string(L_.vertices[s.vertex]) +
+                               ", which rank " + std::to_string(me_) + " does not own");
+    }
+    return in;
   }
 
   void refresh_ghosts() {
@@ -819,17 +863,16 @@ class DistributedImpl final : public DistributedBackend {
       bytes += te.last_bytes();
     }
 
-    // Contact history: to every new owner of one of the entry's free vertices.
+    // Contact history: to the new owner of the entry's anchor vertex, which evaluates it.
     const ContactState& sh = s.contact;
     const std::int64_t nsh = static_cast<std::int64_t>(sh.size());
     std::vector<std::int64_t> hoff{0};
     std::vector<int> hranks;
+    const GlobalVertices gv{owner_};
     for (std::int64_t k = 0; k < nsh; ++k) {
-      const std::size_t first = hranks.size();
-      for (int q = 0; q < 4; ++q)
-        if (sh.v[k][q] >= 0 && owner_[sh.v[k][q]] >= 0) hranks.push_back(owner_[sh.v[k][q]]);
-      std::sort(hranks.begin() + first, hranks.end());
-      hranks.erase(std::unique(hranks.begin() + first, hranks.end()), hranks.end());
+      const int a = anchor_slot(static_cast<int>(sh.k1[k] >> 60), sh.v[k].data(), gv);
+      if (a < 0) throw std::logic_error("contact history entry without a free vertex");
+      hranks.push_back(owner_[sh.v[k][a]]);
       hoff.push_back(static_cast<std::int64_t>(hranks.size()));
     }
     CommEngine he(comm_, hoff, hranks, 0);

@@ -20,12 +20,13 @@
 // Contact across rank borders: each rank holds, besides its owned vertices and the ghosts of
 // its tets, every contact vertex within a band of its owned contact vertices (free bodies'
 // from their owners by halo exchange, fixed bodies' from the model, which every rank has).
-// It evaluates every feature pair it can see and applies the forces to owned vertices only
-// ("evaluate on both, apply owned"): a pair across a border is evaluated on each rank owning
-// one of its vertices, with identical inputs and identical history, and no force needs to be
-// sent back. The band is wide enough for the pairs of owned vertices until some vertex has
-// moved `slack` since the last rebuild; then the ghosts are rebuilt (owners re-assigned from
-// the current partition, one MPI_Allreduce per step checks the distance).
+// Each feature pair is evaluated once, by the owner of its anchor vertex (contact_record.hpp,
+// anchor_slot), which keeps its tangential history; the force shares of vertices other ranks
+// own go to those owners (one variable-length exchange with the halo neighbours per step),
+// which sort them in among their own entries by record key, so every vertex sums its contact
+// forces in the one-rank order. The band is wide enough for the pairs of owned vertices until
+// some vertex has moved `slack` since the last rebuild; then the ghosts are rebuilt (owners
+// re-assigned from the current partition, one MPI_Allreduce per step checks the distance).
 //
 // Rebalancing: every rebalance_every steps the busy time (elements, integration, contact)
 // of each rank over the window gives the imbalance max/mean - 1 and the time per tet, per

@@ -124,6 +124,27 @@ std::uint64_t FeatureIds::k2_to_local(std::uint64_t k1, std::uint64_t k2) const 
   return l < 0 ? kNone : static_cast<std::uint64_t>(l);
 }
 
+ContactShare FeatureIds::to_global(ContactShare s) const {
+  s.k2 = k2_to_global(s.k1, s.k2);
+  s.k1 = k1_to_global(s.k1);
+  s.vertex = vertex[s.vertex];
+  return s;
+}
+
+ContactShare FeatureIds::to_local(ContactShare s) const {
+  const std::uint64_t k1 = k1_to_local(s.k1);
+  const std::uint64_t k2 = k1 == kNone ? kNone : k2_to_local(s.k1, s.k2);
+  const std::int64_t v = local_vertex(s.vertex);
+  if (k2 == kNone || v < 0)
+    throw std::logic_error("contact share of vertex " + std::to_string(s.vertex) +
+                           " names a feature this rank does not hold (key " + std::to_string(s.k1) +
+                           ", " + std::to_string(s.k2) + ")");
+  s.k1 = k1;
+  s.k2 = k2;
+  s.vertex = v;
+  return s;
+}
+
 LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& L,
                              const std::vector<Vec3>& x, const std::vector<Vec3>& v,
                              bool with_contact) {

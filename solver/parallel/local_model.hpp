@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "contact/contact_record.hpp"
 #include "core/vec.hpp"
 #include "model/model.hpp"
 
@@ -68,6 +69,10 @@ class FeatureIds {
   std::uint64_t k1_to_local(std::uint64_t k1) const;
   std::uint64_t k2_to_local(std::uint64_t k1, std::uint64_t k2) const;
   std::int64_t local_vertex(std::int64_t gid) const;  // -1 when not local
+  // A contact force share's key and vertex in global ids, and back (std::logic_error when
+  // the share names a feature or vertex this model lacks).
+  ContactShare to_global(ContactShare s) const;
+  ContactShare to_local(ContactShare s) const;
 
  private:
   std::vector<std::pair<std::int64_t, std::int64_t>> vertex_inv_;  // (global, local) sorted

@@ -1,13 +1,16 @@
 // A rank's part of a distributed model (parallel/local_model.hpp), without MPI: the free
 // vertices of a model are split in two "ranks" by a plane; each part holds its owned vertices,
 // the tets touching them and their other vertices as ghosts (values copied from the whole
-// model, as the halo exchange would). The owned vertices' forces equal the whole model's bit
-// for bit, the home tets' strain energies add up to the whole model's, and contact keys
-// translate to global ids and back.
+// model, as the halo exchange would). Each part evaluates the contacts anchored at its owned
+// vertices (each once over the two) and hands the other the force shares of its vertices; the
+// owned vertices' forces equal the whole model's bit for bit, the home tets' strain energies
+// add up to the whole model's, and contact keys translate to global ids and back.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <memory>
 #include <set>
+#include <vector>
 
 #include "contact/contact_record.hpp"
 #include "integrate/backend.hpp"
@@ -89,21 +92,43 @@ TEST(LocalModel, TwoPartsGiveTheWholeModelsForcesBitForBit) {
   pb.backend->kick(1.0);
   const HostFields whole_kicked = pb.backend->download(false);
 
-  Energies sum;
-  std::int64_t owned = 0, home = 0;
+  // Each part evaluates the contacts anchored at its owned vertices; the force shares of the
+  // other part's vertices cross over in global ids, as the distributed backend sends them.
+  std::vector<LocalLayout> layouts;
+  std::vector<LocalModel> parts;
+  std::vector<std::unique_ptr<Backend>> backends;
+  std::vector<ContactShare> crossing[2];
+  std::int64_t records = 0;
   for (int side = 0; side < 2; ++side) {
-    const LocalLayout L = layout_of(g, ix, side, 0.3);
+    const LocalLayout& L = layouts.emplace_back(layout_of(g, ix, side, 0.3));
     std::vector<Vec3> x, v;
     for (auto gv : L.vertices) {
       x.push_back(moved.x[gv]);
       v.push_back(moved.v[gv]);
     }
-    const LocalModel lm = build_local_model(g, ix, L, x, v);
+    const LocalModel& lm = parts.emplace_back(build_local_model(g, ix, L, x, v));
     EXPECT_EQ(lm.model.n_free_vertices, L.n_owned);
     EXPECT_EQ(lm.model.n_counted_tets, L.n_home);
-    auto be = make_host_backend();
+    auto& be = backends.emplace_back(make_host_backend());
     be->upload(lm.model);
-    be->compute_forces(1e-4, g.mass_damping);
+    be->element_forces(0, lm.model.n_free_tets, 1e-4);
+    be->assemble_forces(1e-4, g.mass_damping);
+    for (const ContactShare& c : be->contact_shares())
+      crossing[1 - side].push_back(lm.ids.to_global(c));
+    records += static_cast<std::int64_t>(be->contact_stats().at("contacts"));
+  }
+  EXPECT_GT(crossing[0].size() + crossing[1].size(), 0u);
+  EXPECT_EQ(records, static_cast<std::int64_t>(whole_state.contact->size()));  // each once
+
+  Energies sum;
+  std::int64_t owned = 0, home = 0;
+  for (int side = 0; side < 2; ++side) {
+    const LocalLayout& L = layouts[side];
+    const LocalModel& lm = parts[side];
+    auto& be = backends[side];
+    std::vector<ContactShare> in;
+    for (const ContactShare& c : crossing[side]) in.push_back(lm.ids.to_local(c));
+    be->add_contact_forces(in);
     const BackendState st = be->save_state();
     const HostFields h = be->download(true);
     const Energies e = be->energies();
