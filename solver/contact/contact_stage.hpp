@@ -66,9 +66,13 @@ struct Evaluator {
   View<const std::uint64_t> vgid;
   View<const std::int32_t> vertex_body, body_fixed;
   std::int64_t nfv = 0;
+  bool all = true;  // one process (no ghosts): every record, no test needed
   QDEMSPH_HD bool free(int i) const { return !body_fixed[vertex_body[i]]; }
   QDEMSPH_HD std::uint64_t gid(int i) const { return vgid[i]; }
+  // A free vertex another rank owns.
+  QDEMSPH_HD bool ghost(int i) const { return !all && i >= nfv && free(i); }
   QDEMSPH_HD bool owns(int type, const std::int32_t* v) const {
+    if (all) return true;
     const int k = anchor_slot(type, v, *this);
     return k >= 0 && v[k] < nfv;
   }
@@ -128,7 +132,7 @@ struct ContactTopology {
       for (std::int64_t q = own_v_off[s1]; q < own_v_off[s1 + 1]; ++q) {
         const int A = own_v[q];
         if (same && tri_has(s2, A)) continue;
-        if (eval.free(A) && A >= eval.nfv) continue;  // its owner tests a free vertex's touches
+        if (eval.ghost(A)) continue;  // its owner tests a free vertex's touches
         const Vec3 xa = x[A];
         const double s_est = dot(xa - p2[0], n2);
         if (s_est > d_dem + tol || s_est < -pen - tol) continue;
@@ -494,7 +498,7 @@ class ContactStage {
         Exec{}, n_prev_, QDEMSPH_LAMBDA(std::int64_t c) { return en[c]; });
   }
   Evaluator evaluator() const {
-    return {vgid_.cview(), vertex_body_.cview(), body_fixed_.cview(), nfv_};
+    return {vgid_.cview(), vertex_body_.cview(), body_fixed_.cview(), nfv_, !ghosts_};
   }
   // Energy dissipated by the contact dashpots and Coulomb slip since the start [J].
   double dissipated_energy() const { return dissipated_; }
@@ -639,6 +643,7 @@ class ContactStage {
     const bool self = self_;
     const auto pvv = pv;
     const std::int64_t nfv = nfv_;
+    const bool ghosts = ghosts_;
     // Only primitives of free bodies start a pair (they come first): a fixed-fixed pair is
     // never needed, and a free-fixed pair (i < npf <= j) is found from its free side. On an
     // MPI rank a pair of two free primitives without an owned vertex is another rank's
@@ -647,7 +652,7 @@ class ContactStage {
         cells_, cc, rr, gap, npf_, QDEMSPH_LAMBDA(std::int64_t i, std::int64_t j)->bool {
           const int bi = pb[i], bj = pb[j];
           if (fixed[bi] && fixed[bj]) return false;
-          if (!fixed[bj]) {
+          if (ghosts && !fixed[bj]) {
             bool owned = false;
             for (int a = 0; a < 8 && !owned; ++a) {
               const int va = pvv[(a & 3) * np + (a < 4 ? i : j)];
