@@ -488,19 +488,8 @@ class DistributedImpl final : public DistributedBackend {
 
   StateSlice export_state() override {
     StateSlice s;
-    const HostFields h = local_->download(false);
     const BackendState st = local_->save_state();
-    for (std::int64_t i = 0; i < L_.n_owned; ++i) {
-      s.vertex.push_back(L_.vertices[i]);
-      s.x.push_back(h.x[i]);
-      s.v.push_back(h.v[i]);
-      s.f.push_back(st.f[i]);
-      s.diss_v.push_back(st.diss_v[i]);
-      if (relaxing_) {
-        s.x0.push_back(st.x0[i]);
-        s.f0.push_back(st.f0[i]);
-      }
-    }
+    for (std::int64_t i = 0; i < L_.n_owned; ++i) s.add_vertex(L_.vertices[i], st, i, relaxing_);
     for (std::int64_t j = 0; j < L_.n_home; ++j) {
       s.tet.push_back(L_.tets[j]);
       s.diss_t.push_back(st.diss_t[j]);
@@ -590,17 +579,7 @@ class DistributedImpl final : public DistributedBackend {
       throw InputError("backend state does not fit the model (vertex, tet or contact counts)");
     StateSlice s;
     const std::int64_t nfv = g.n_free_vertices, nft = g.n_free_tets;
-    for (std::int64_t i = nfv * me_ / np_; i < nfv * (me_ + 1) / np_; ++i) {
-      s.vertex.push_back(i);
-      s.x.push_back(w.x[i]);
-      s.v.push_back(w.v[i]);
-      s.f.push_back(w.f[i]);
-      s.diss_v.push_back(w.diss_v[i]);
-      if (relax) {
-        s.x0.push_back(w.x0[i]);
-        s.f0.push_back(w.f0[i]);
-      }
-    }
+    for (std::int64_t i = nfv * me_ / np_; i < nfv * (me_ + 1) / np_; ++i) s.add_vertex(i, w, i, relax);
     for (std::int64_t t = nft * me_ / np_; t < nft * (me_ + 1) / np_; ++t) {
       s.tet.push_back(t);
       s.diss_t.push_back(w.diss_t[t]);

@@ -78,6 +78,19 @@ struct StateSlice {
   // run's); the pair-list reference and counters stay empty (the list is rebuilt for the new
   // layout).
   ContactState contact;
+
+  // Appends free vertex `id` with entry i of a backend state (its x0, f0 when relaxing).
+  void add_vertex(std::int64_t id, const BackendState& st, std::int64_t i, bool relaxing) {
+    vertex.push_back(id);
+    x.push_back(st.x[i]);
+    v.push_back(st.v[i]);
+    f.push_back(st.f[i]);
+    diss_v.push_back(st.diss_v[i]);
+    if (relaxing) {
+      x0.push_back(st.x0[i]);
+      f0.push_back(st.f0[i]);
+    }
+  }
 };
 
 class DistributedBackend : public Backend {
