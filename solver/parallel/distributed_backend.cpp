@@ -579,7 +579,8 @@ class DistributedImpl final : public DistributedBackend {
       throw InputError("backend state does not fit the model (vertex, tet or contact counts)");
     StateSlice s;
     const std::int64_t nfv = g.n_free_vertices, nft = g.n_free_tets;
-    for (std::int64_t i = nfv * me_ / np_; i < nfv * (me_ + 1) / np_; ++i) s.add_vertex(i, w, i, relax);
+    for (std::int64_t i = nfv * me_ / np_; i < nfv * (me_ + 1) / np_; ++i)
+      s.add_vertex(i, w, i, relax);
     for (std::int64_t t = nft * me_ / np_; t < nft * (me_ + 1) / np_; ++t) {
       s.tet.push_back(t);
       s.diss_t.push_back(w.diss_t[t]);

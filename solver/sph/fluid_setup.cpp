@@ -60,7 +60,8 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
   P.gravity = gravity;
   if (spec.periodic_z) {
     if (up == 2)
-      throw InputError("fluid.periodic_z: gravity points along z; the periodic axis must be horizontal");
+      throw InputError(
+          "fluid.periodic_z: gravity points along z; the periodic axis must be horizontal");
     f.z0 = (*spec.periodic_z)[0];
     f.period_z = (*spec.periodic_z)[1] - f.z0;
   }

@@ -20,9 +20,9 @@ enum SphType : std::uint8_t { kSphFluid = 0, kSphWall = 1, kSphSolid = 2 };
 
 struct FluidSetup {
   SphParams params;
-  double dx = 0;      // particle spacing
-  double height = 0;  // largest fluid block height along gravity (for auto c0)
-  Vec3 lo{}, hi{};    // box the neighbour grid covers (all particles plus a margin)
+  double dx = 0;                // particle spacing
+  double height = 0;            // largest fluid block height along gravity (for auto c0)
+  Vec3 lo{}, hi{};              // box the neighbour grid covers (all particles plus a margin)
   double z0 = 0, period_z = 0;  // periodic_z: [z0, z0 + period_z] (period_z 0: not periodic)
   std::vector<Vec3> x, v;
   std::vector<double> rho, p, m;

@@ -49,7 +49,8 @@ QDEMSPH_HD void sph_for_each_near(const CellGrid& g, const std::int64_t* start, 
   constexpr int R = kSphCellsPerSupport;
   const std::int64_t nc = std::int64_t(g.n[0]) * g.n[1] * g.n[2];
   const bool pz = g.period_z > 0;
-  const int cx = g.coord(p.x, 0), cy = g.coord(p.y, 1), cz = pz ? g.unwrapped_z(p.z) : g.coord(p.z, 2);
+  const int cx = g.coord(p.x, 0), cy = g.coord(p.y, 1),
+            cz = pz ? g.unwrapped_z(p.z) : g.coord(p.z, 2);
   const int x0 = cx > R ? cx - R : 0, x1 = cx + R < g.n[0] ? cx + R : g.n[0] - 1;
   for (int zz = cz - R; zz <= cz + R; ++zz) {
     int z = zz;
@@ -92,8 +93,8 @@ class SphStage final : public FluidStage {
     m_.assign(f.m);
     type_.assign(f.type);
     gid_.assign(f.gid);
-    grid_ = CellGrid::cover(f.lo, f.hi, P_.kernel.support() / kSphCellsPerSupport, f.z0,
-                            f.period_z);
+    grid_ =
+        CellGrid::cover(f.lo, f.hi, P_.kernel.support() / kSphCellsPerSupport, f.z0, f.period_z);
     start_.resize(kSphGroups * grid_.count() + 1);
     if (nm_ > 0) {
       if (!solid) throw InputError("the fluid has body markers but no body state to couple to");
@@ -146,7 +147,7 @@ class SphStage final : public FluidStage {
           sph_for_each_near(g, start, kGroupFluid, kSphGroups, si.x, [&](std::int64_t j, int zz) {
             const Vec3 xj = g.image(x[j], zz);
             const double r2 = norm2(si.x - xj);  // 0: i itself (not its periodic images)
-            if (r2 == 0 || r2 >= s2) return;      // most candidates: no further loads
+            if (r2 == 0 || r2 >= s2) return;     // most candidates: no further loads
             const PairState sj{xj, v[j], rho[j], m[j], 0.0};
             dr += sph_density_rate(P, si, sj, j < nf);
           });
@@ -175,9 +176,10 @@ class SphStage final : public FluidStage {
             const std::int64_t i = nf + q;
             const Vec3 xi = x[i];
             AdamiSum s;
-            sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, xi, [&](std::int64_t j, int zz) {
-              adami_add(s, P.kernel, xi, g.image(x[j], zz), p[j], rho[j]);
-            });
+            sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, xi,
+                              [&](std::int64_t j, int zz) {
+                                adami_add(s, P.kernel, xi, g.image(x[j], zz), p[j], rho[j]);
+                              });
             const double pw = adami_pressure(s, P.gravity, Vec3{});
             p[i] = pw;
             rho[i] = P.eos.density(pw);
@@ -216,12 +218,13 @@ class SphStage final : public FluidStage {
             const PairState si{x[i], v[i], rho[i], m[i], pr[i]};
             Vec3 f{};
             const double s2 = P.kernel.support2;
-            sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, si.x, [&](std::int64_t j, int zz) {
-              const Vec3 xj = g.image(x[j], zz);
-              if (norm2(si.x - xj) >= s2) return;
-              const PairState sj{xj, v[j], rho[j], m[j], pr[j]};
-              f -= sph_boundary_force(P, sj, si, wall_visc);
-            });
+            sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, si.x,
+                              [&](std::int64_t j, int zz) {
+                                const Vec3 xj = g.image(x[j], zz);
+                                if (norm2(si.x - xj) >= s2) return;
+                                const PairState sj{xj, v[j], rho[j], m[j], pr[j]};
+                                f -= sph_boundary_force(P, sj, si, wall_visc);
+                              });
             F.set(static_cast<std::int64_t>(gid[i] - g0), f);
           });
       coupling_->apply(ddt);

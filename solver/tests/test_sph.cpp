@@ -319,12 +319,14 @@ fluid:
     EXPECT_NE(std::string(e.what()).find("fluid.blocks.0.max.0"), std::string::npos) << e.what();
   }
   const std::string base =
-      "run: {end_time: 0.1}\ngravity: [0, -9.81, 0]\nfluid: {spacing: 0.02, blocks: [{min: [0, 0, 0], "
+      "run: {end_time: 0.1}\ngravity: [0, -9.81, 0]\nfluid: {spacing: 0.02, blocks: [{min: [0, 0, "
+      "0], "
       "max: [0.2, 0.1, 0.04]}], ";
-  EXPECT_EQ(parse_scene(base + "periodic_z: [0, 0.04]}\n", "p.yaml", {}).fluid.periodic_z->at(1), 0.04);
-  for (const auto& [bad, expect] :
-       std::vector<std::pair<std::string, std::string>>{
-           {"periodic_z: [0, 0.05]}", "fluid.periodic_z: z1 - z0 must be a whole number of spacings"},
+  EXPECT_EQ(parse_scene(base + "periodic_z: [0, 0.04]}\n", "p.yaml", {}).fluid.periodic_z->at(1),
+            0.04);
+  for (const auto& [bad, expect] : std::vector<std::pair<std::string, std::string>>{
+           {"periodic_z: [0, 0.05]}",
+            "fluid.periodic_z: z1 - z0 must be a whole number of spacings"},
            {"periodic_z: [0, 0.02]}", "fluid.blocks.0: must lie within fluid.periodic_z in z"},
            {"periodic_z: [0.04, 0]}", "fluid.periodic_z.1: must be > z0"}}) {
     try {
