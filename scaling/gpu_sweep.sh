@@ -12,8 +12,9 @@
 # (CUDA + MPI build); carried to the GPU machine. SWEEP_BUDGET_S (default 540) bounds the
 # whole call: the parts run in order of importance, each with a share of what is left, and
 # a part whose next run would not fit is cut short (the record says which ran).
-# SWEEP_PARTS (default all) picks parts: cubes-gpu cubes-cpu dambreak-gpu dambreak-cpu
-# topple-gpu topple-cpu balance-cpu balance-gpu probes (and balance-sph, not in all: the
+# SWEEP_PARTS (default all) picks parts: cubes-gpu cubes-cpu cubes-copies dambreak-gpu
+# dambreak-cpu topple-gpu topple-cpu topple-copies balance-cpu balance-gpu probes (*-copies: N
+# independent one-rank runs at once, the node's own slowdown; run.py --launcher copies) (and balance-sph, not in all: the
 # SPH stage is not distributed yet, so the dam-break sweeps stop after their 1-rank run).
 set -uo pipefail
 export PATH=$PATH:/usr/local/cuda/bin
@@ -92,10 +93,12 @@ part() {
 
 if [ -n "$GPU_RANKS" ]; then part cubes-gpu 0.12 cubes-weak --backend cuda --ranks "$GPU_RANKS"; fi
 part cubes-cpu 0.35 cubes-weak --backend cpu --ranks "$CPU_RANKS"
+part cubes-copies 0.3 cubes-weak --backend cpu --ranks "$CPU_RANKS" --launcher copies
 if [ -n "$GPU_RANKS" ]; then part dambreak-gpu 0.08 dambreak-weak --backend cuda --ranks "$GPU_RANKS"; fi
 part dambreak-cpu 0.10 dambreak-weak --backend cpu --ranks "$CPU_RANKS"
 if [ -n "$GPU_RANKS" ]; then part topple-gpu 0.2 topple-weak --backend cuda --ranks "$GPU_RANKS"; fi
 part topple-cpu 0.40 topple-weak --backend cpu --ranks "$CPU_RANKS"
+part topple-copies 0.4 topple-weak --backend cpu --ranks "$CPU_RANKS" --launcher copies
 if [ "$DIST" = 1 ]; then
   BAL=4; [ "$NCPU" -ge 16 ] && BAL=4,8
   part balance-cpu 0.6 slide-balance --backend cpu --ranks "$BAL" --variants balanced,static
