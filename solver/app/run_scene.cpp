@@ -268,6 +268,18 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   summary["threads"] = backend_name == "cpu" ? omp_get_max_threads() : 0;
   summary["mode"] = scene.run.mode == RunMode::Static ? "static" : "dynamic";
   summary["n_bodies"] = model.bodies.size();
+  summary["bodies"] = Json::array();  // index -> name, as fields.h5's /mesh/body numbers them
+  for (const BodyRange& b : model.bodies) {
+    Json bj = Json::object();
+    bj["name"] = b.name;
+    bj["fixed"] = b.fixed;
+    bj["n_vertices"] = b.v_end - b.v_begin;
+    bj["n_tets"] = b.t_end - b.t_begin;
+    summary["bodies"].push_back(bj);
+  }
+  summary["gravity"] = Json::array();
+  for (double g : {scene.gravity.x, scene.gravity.y, scene.gravity.z})
+    summary["gravity"].push_back(g);
   summary["n_vertices"] = model.n_vertices();
   summary["n_tets"] = model.n_tets();
   summary["n_free_tets"] = model.n_free_tets;
