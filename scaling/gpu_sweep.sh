@@ -13,9 +13,8 @@
 # whole call: the parts run in order of importance, each with a share of what is left, and
 # a part whose next run would not fit is cut short (the record says which ran).
 # SWEEP_PARTS (default all) picks parts: cubes-gpu cubes-cpu cubes-copies dambreak-gpu
-# dambreak-cpu topple-gpu topple-cpu topple-copies cubes-speed topple-speed balance-cpu
-# balance-gpu probes (*-copies: N independent one-rank runs at once, the node's own slowdown;
-# run.py --launcher copies; *-speed: cuts by measured rank speed against equal costs) (and balance-sph, not in all: the
+# dambreak-cpu topple-gpu topple-cpu topple-copies balance-cpu balance-gpu probes (*-copies: N
+# independent one-rank runs at once, the node's own slowdown; run.py --launcher copies) (and balance-sph, not in all: the
 # SPH stage is not distributed yet, so the dam-break sweeps stop after their 1-rank run).
 set -uo pipefail
 export PATH=$PATH:/usr/local/cuda/bin
@@ -101,10 +100,6 @@ if [ -n "$GPU_RANKS" ]; then part topple-gpu 0.2 topple-weak --backend cuda --ra
 part topple-cpu 0.40 topple-weak --backend cpu --ranks "$CPU_RANKS"
 part topple-copies 0.4 topple-weak --backend cpu --ranks "$CPU_RANKS" --launcher copies
 if [ "$DIST" = 1 ]; then
-  # Cuts by measured rank speed (the default) against equal modelled costs: the cube block
-  # re-cut every 10 of 100 steps, the dominoes every 100 of their ~1,000.
-  part cubes-speed 0.5 cubes-weak --backend cpu --ranks "$CPU_RANKS" --steps 100 --variants rebalance10,rebalance10-equal
-  part topple-speed 0.5 topple-weak --backend cpu --ranks "$CPU_RANKS" --variants balanced,equal
   BAL=4; [ "$NCPU" -ge 16 ] && BAL=4,8
   part balance-cpu 0.6 slide-balance --backend cpu --ranks "$BAL" --variants balanced,static
   [ "$NGPU" -ge 2 ] && part balance-gpu 0.9 slide-balance --backend cuda --ranks 2 --variants balanced,static

@@ -42,21 +42,14 @@ except ImportError:
     yaml = None
 
 # The scene keys of the distributed stepper's `parallel:` block used by the sweeps (one
-# place, so that a renamed key is one edit; docs/scene-format.md `parallel`: curve,
-# rebalance_threshold (0.10), rebalance_every (100 steps), max_cell_cost, rank_speed).
-# `balanced`: the defaults; `static`: the first partition is kept (vertices still migrate to
-# the owners of the pieces they move into, but the pieces are never re-cut); `equal`: re-cut
-# to equal modelled costs instead of the ranks' measured speeds.
-PARALLEL_KEYS = {"curve": "curve", "threshold": "rebalance_threshold", "every": "rebalance_every",
-                 "speed": "rank_speed"}
+# place, so that a renamed key is one edit; docs/scene-format.md on the mpi branch: curve,
+# rebalance_threshold (0.10), rebalance_every (100 steps), max_cell_cost). `balanced`: the
+# defaults; `static`: the first partition is kept (vertices still migrate to the owners of
+# the pieces they move into, but the pieces are never re-cut).
+PARALLEL_KEYS = {"curve": "curve", "threshold": "rebalance_threshold", "every": "rebalance_every"}
 VARIANTS = {
     "balanced": {},
     "static": {PARALLEL_KEYS["threshold"]: 1.0e9},
-    # Measured every 10 steps (short sweeps such as cubes-weak's), cut by measured rank speed
-    # (the default) or to equal modelled costs.
-    "rebalance10": {PARALLEL_KEYS["every"]: 10},
-    "rebalance10-equal": {PARALLEL_KEYS["every"]: 10, PARALLEL_KEYS["speed"]: False},
-    "equal": {PARALLEL_KEYS["speed"]: False},
 }
 
 # gap: D_DEM, the vertical gap (each cube starts resting on the one below at the contact

@@ -182,7 +182,6 @@ struct ParallelSpec {
       0.10;                     // rebalance when measured max/mean - 1 of step time exceeds it
   long rebalance_every = 100;   // steps between imbalance measurements
   double max_cell_cost = 0.02;  // tree leaves are split above this fraction of a rank's load
-  bool rank_speed = true;       // rebalance to each rank's measured speed, not equal costs
 };
 
 struct Scene {

@@ -694,8 +694,7 @@ OutputSpec parse_output(const Context& ctx, const Field& f, const std::string& s
 }
 
 ParallelSpec parse_parallel(const Context& ctx, const Field& f) {
-  const MapView m(
-      ctx, f, {"curve", "rebalance_threshold", "rebalance_every", "max_cell_cost", "rank_speed"});
+  const MapView m(ctx, f, {"curve", "rebalance_threshold", "rebalance_every", "max_cell_cost"});
   ParallelSpec p;
   if (auto v = m.opt("curve")) p.curve = v->choice({"hilbert", "morton", "peano"});
   if (auto v = m.opt("rebalance_threshold"))
@@ -705,7 +704,6 @@ ParallelSpec parse_parallel(const Context& ctx, const Field& f) {
   if (auto v = m.opt("max_cell_cost"))
     p.max_cell_cost = v->number([](double x) { return x > 0 && x <= 1; },
                                 "must be in (0, 1] (a fraction of the mean load of a rank)");
-  if (auto v = m.opt("rank_speed")) p.rank_speed = v->boolean();
   return p;
 }
 

@@ -37,10 +37,9 @@ Curve parse_curve(const std::string& name);  // hilbert | morton | peano
 const char* curve_name(Curve c);
 
 // pos/cost: this rank's items. max_cell_fraction: leaves are split while their cost exceeds
-// this fraction of the mean rank load (down to the finest grid level). share: each rank's
-// fraction of the total cost (partition.hpp; empty: equal pieces), the same on every rank.
+// this fraction of the mean rank load (down to the finest grid level).
 Decomposition balance(MPI_Comm comm, std::span<const Vec3> pos, std::span<const double> cost,
-                      Curve curve, double max_cell_fraction, std::span<const double> share = {});
+                      Curve curve, double max_cell_fraction);
 
 // Sum over ranks with the same result on every rank (reduce to rank 0, then broadcast), so
 // that decisions taken from it agree everywhere.

@@ -22,7 +22,6 @@ ParallelOptions parallel_options(const ParallelSpec& spec) {
   o.rebalance_threshold = spec.rebalance_threshold;
   o.rebalance_every = spec.rebalance_every;
   o.max_cell_cost = spec.max_cell_cost;
-  o.rank_speed = spec.rank_speed;
   return o;
 }
 
@@ -455,7 +454,6 @@ class DistributedImpl final : public DistributedBackend {
     r.imbalance = last_imbalance_;
     r.imbalance_initial = imbalance_initial_;
     r.rebalance_log = log_;
-    r.shares = cut_shares_.empty() ? std::vector<double>(np_, 1.0 / np_) : cut_shares_;
     const auto& t = timers_.seconds();
     auto sec = [](const std::map<std::string, double>& m, const char* k) {
       const auto it = m.find(k);
@@ -727,14 +725,8 @@ class DistributedImpl final : public DistributedBackend {
     }
   }
 
-  // A free vertex's cost in the partition: itself, the tets it is home to (tets_at), its
-  // contact primitives, each weighted by the measured time per item.
-  double vertex_cost(std::int64_t gv) const {
-    return w_.vertex + w_.tet * ix_.tets_at[gv] + (ix_.contact_vertex[gv] ? w_.contact : 0);
-  }
-
-  // Busy time of each rank since the last window: the imbalance, the time per item that
-  // weights the cost of the next partition and (rank_speed) each rank's share of it.
+  // Busy time of each rank since the last window: the imbalance, and the time per item that
+  // weights the cost of the next partition.
   double measure_window() {
     const auto& t = timers_.seconds();
     auto sec = [&](const char* k) {
@@ -744,8 +736,7 @@ class DistributedImpl final : public DistributedBackend {
     const double contact = local_contact_seconds();
     const double te = sec("elements") - contact, ti = sec("integration");
     const double busy = te + ti + contact;
-    const double my_busy = busy - mark_[0];
-    double w[7] = {my_busy,
+    double w[7] = {busy - mark_[0],
                    te - mark_[1],
                    ti - mark_[2],
                    contact - mark_[3],
@@ -761,17 +752,6 @@ class DistributedImpl final : public DistributedBackend {
     if (w[4] > 0 && w[1] > 0) w_.tet = w[1] / w[4];
     if (w[5] > 0 && w[2] > 0) w_.vertex = w[2] / w[5];
     if (w[6] > 0 && w[3] > 0) w_.contact = w[3] / w[6];
-    if (opt_.rank_speed && np_ > 1) {
-      // This window's load of each rank in the cost model of the cut (with the weights just
-      // measured) against its busy time: the shares of the next cut.
-      double mine[2] = {0, my_busy};
-      for (std::int64_t i = 0; i < L_.n_owned; ++i) mine[0] += vertex_cost(L_.vertices[i]);
-      std::vector<double> all(2 * np_);
-      MPI_Allgather(mine, 2, MPI_DOUBLE, all.data(), 2, MPI_DOUBLE, comm_);
-      std::vector<double> load(np_), time(np_);
-      for (int r = 0; r < np_; ++r) load[r] = all[2 * r], time[r] = all[2 * r + 1];
-      shares_ = speed_shares(load, time);
-    }
     if (windows_++ == 0) imbalance_initial_ = imb;
     if (pending_after_) {
       log_.back().imbalance_after = imb;
@@ -791,9 +771,11 @@ class DistributedImpl final : public DistributedBackend {
     if (rebalance || dec_.splitters.empty()) {
       auto scope = timers_.scope("balance");
       std::vector<double> cost(nsv);
-      for (std::int64_t k = 0; k < nsv; ++k) cost[k] = vertex_cost(s.vertex[k]);
-      dec_ = balance(comm_, s.x, cost, curve_, opt_.max_cell_cost, shares_);
-      cut_shares_ = shares_;
+      for (std::int64_t k = 0; k < nsv; ++k) {
+        const std::int64_t gv = s.vertex[k];
+        cost[k] = w_.vertex + w_.tet * ix_.tets_at[gv] + (ix_.contact_vertex[gv] ? w_.contact : 0);
+      }
+      dec_ = balance(comm_, s.x, cost, curve_, opt_.max_cell_cost);
       predicted_after_ = dec_.predicted_imbalance;
     }
     auto scope = timers_.scope("migration");
@@ -1123,7 +1105,6 @@ class DistributedImpl final : public DistributedBackend {
   std::map<std::string, double> contact_acc_;
   double overlap_acc_ = 0, rebuilds_acc_ = 0;
   Weights w_;
-  std::vector<double> shares_, cut_shares_;  // of the next cut, of the current (empty: equal)
   double mark_[4] = {0, 0, 0, 0};
   std::int64_t steps_ = 0, window_start_ = 0, windows_ = 0, rebuilds_ = 0, rebalances_ = 0;
   double last_imbalance_ = 0, imbalance_initial_ = 0, predicted_after_ = 0;

@@ -55,7 +55,6 @@ struct ParallelOptions {
   double rebalance_threshold = 0.10;
   long rebalance_every = 100;
   double max_cell_cost = 0.02;
-  bool rank_speed = true;  // cut by measured rank speed (balance.hpp speed_shares)
 };
 ParallelOptions parallel_options(const ParallelSpec& spec);
 

@@ -34,9 +34,6 @@ Json ParallelRecord::to_json() const {
     log.push_back(r);
   }
   j["rebalance_log"] = log;
-  Json sh = Json::array();
-  for (double x : shares) sh.push_back(x);
-  j["shares"] = sh;
   return j;
 }
 
@@ -46,7 +43,6 @@ ParallelRecord serial_parallel_record(const Model& model, const std::string& cur
   r.curve = curve;
   r.owned_vertices = {model.n_free_vertices};
   r.owned_tets = {model.n_free_tets};
-  r.shares = {1.0};
   for (const char* p : kParallelPhases) {
     const auto it = phases.find(p);
     r.phases_max[p] = r.phases_mean[p] = it == phases.end() ? 0.0 : it->second;

@@ -12,8 +12,6 @@
 //   phases_max, phases_mean      per phase, seconds over ranks (kParallelPhases)
 //   rebalance_log        [{step, imbalance_before, imbalance_after, bytes}]; imbalance_after
 //                        is measured over the next window (or the rest of the run)
-//   shares               per rank: its fraction of the total cost in the current cut (equal
-//                        unless parallel.rank_speed cut by measured speed)
 #pragma once
 
 #include <cstdint>
@@ -45,7 +43,6 @@ struct ParallelRecord {
   std::vector<std::int64_t> owned_vertices, owned_tets;
   std::map<std::string, double> phases_max, phases_mean;
   std::vector<RebalanceEntry> rebalance_log;
-  std::vector<double> shares;
 
   Json to_json() const;
 };

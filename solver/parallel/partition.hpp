@@ -10,10 +10,6 @@
 // lie in [r W / n, (r + 1) W / n), so
 //     |load_r - W / n| <= max_i c_i        for every rank r.
 // A rank may get no cell when one cell costs more than W / n.
-//
-// Unequal shares (ranks of unequal speed, balance.hpp speed_shares): rank r gets the cells
-// whose midpoints lie in [S_r W, S_{r+1} W), S_r = share_0 + ... + share_{r-1}, so
-//     |load_r - share_r W| <= max_i c_i.
 #pragma once
 
 #include <cstdint>
@@ -23,11 +19,10 @@
 namespace qdemsph {
 
 // Owner rank of each cell. keys: cell keys in increasing order (checked); cost: >= 0 and
-// finite, one per cell; nranks >= 1; share: empty (1 / nranks each) or one fraction per
-// rank, >= 0 and finite, summing to 1 (checked to 1e-9). Cells of zero total cost are spread
-// by count. Throws std::invalid_argument on bad input.
+// finite, one per cell; nranks >= 1. Cells of zero total cost are spread by count.
+// Throws std::invalid_argument on bad input.
 std::vector<int> partition_cells(std::span<const std::uint64_t> keys, std::span<const double> cost,
-                                 int nranks, std::span<const double> share = {});
+                                 int nranks);
 
 // The first key of each rank's piece (nranks + 1 entries; a rank without cells gets the
 // next rank's first key, the last entry is UINT64_MAX), so that any key, including keys of
@@ -39,19 +34,10 @@ int owner_of_key(std::span<const std::uint64_t> splitters, std::uint64_t key);
 struct PartitionStats {
   std::vector<double> load;  // cost per rank
   double mean = 0, max = 0;
-  double imbalance = 0;  // max / mean - 1 (0 when balanced or empty); with shares the
-                         // largest load over its target share_r W, - 1
+  double imbalance = 0;  // max / mean - 1 (0 when balanced or empty)
   double max_cell = 0;   // the largest single cell cost
 };
-PartitionStats partition_stats(std::span<const double> cost, std::span<const int> owner, int nranks,
-                               std::span<const double> share = {});
-
-// The shares of the next cut from each rank's measured speed: rank r carried `load[r]` (the
-// cost model's units, summed over its items) in `busy[r]` seconds of work, so its speed is
-// load / busy and its share is its speed over the sum. What the cost model misses (a core
-// slower than the others, the halo tets of a border piece) then counts as slowness and is
-// cut away. A rank without load or time takes the mean speed; speeds are held within
-// [1/4, 4] x the mean (one noisy window must not starve a rank). Equal speeds: equal shares.
-std::vector<double> speed_shares(std::span<const double> load, std::span<const double> busy);
+PartitionStats partition_stats(std::span<const double> cost, std::span<const int> owner,
+                               int nranks);
 
 }  // namespace qdemsph

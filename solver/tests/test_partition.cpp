@@ -88,66 +88,6 @@ TEST(Partition, EdgeCases) {
                std::invalid_argument);
 }
 
-// Unequal shares: rank r's load lies within the largest cell cost of share_r W; equal shares
-// given explicitly cut exactly as none.
-TEST(Partition, SharesBoundEachLoad) {
-  std::mt19937_64 rng(13);
-  std::uniform_real_distribution<double> U(0, 1);
-  for (int trial = 0; trial < 100; ++trial) {
-    const int ncell = 1 + static_cast<int>(rng() % 400);
-    const int nranks = 1 + static_cast<int>(rng() % 9);
-    std::vector<std::uint64_t> keys(ncell);
-    std::vector<double> cost(ncell), share(nranks);
-    for (int i = 0; i < ncell; ++i) keys[i] = 2 * static_cast<std::uint64_t>(i), cost[i] = U(rng);
-    double sum = 0;
-    for (double& x : share) sum += (x = 0.25 + U(rng));
-    for (double& x : share) x /= sum;
-    SCOPED_TRACE("trial " + std::to_string(trial));
-    const std::vector<int> owner = partition_cells(keys, cost, nranks, share);
-    for (int i = 1; i < ncell; ++i) ASSERT_GE(owner[i], owner[i - 1]);
-    const PartitionStats st = partition_stats(cost, owner, nranks, share);
-    const double W = st.mean * nranks;
-    for (int r = 0; r < nranks; ++r)
-      EXPECT_LE(std::abs(st.load[r] - share[r] * W), st.max_cell * (1 + 1e-12) + 1e-12);
-    EXPECT_EQ(partition_cells(keys, cost, nranks, std::vector<double>(nranks, 1.0 / nranks)),
-              partition_cells(keys, cost, nranks));
-  }
-  // Known answer: 10 unit cells, shares 0.2 / 0.8 -> 2 and 8 cells.
-  std::vector<std::uint64_t> keys(10);
-  for (int i = 0; i < 10; ++i) keys[i] = i;
-  const std::vector<int> owner =
-      partition_cells(keys, std::vector<double>(10, 1.0), 2, std::vector<double>{0.2, 0.8});
-  for (int i = 0; i < 10; ++i) EXPECT_EQ(owner[i], i < 2 ? 0 : 1);
-  EXPECT_THROW(partition_cells(keys, std::vector<double>(10, 1.0), 2, std::vector<double>{0.5}),
-               std::invalid_argument);  // one share for two ranks
-  EXPECT_THROW(
-      partition_cells(keys, std::vector<double>(10, 1.0), 2, std::vector<double>{0.5, 0.6}),
-      std::invalid_argument);  // sum 1.1
-  EXPECT_THROW(
-      partition_cells(keys, std::vector<double>(10, 1.0), 2, std::vector<double>{-0.5, 1.5}),
-      std::invalid_argument);
-}
-
-// A rank twice as fast gets twice the share; missing measurements take the mean speed;
-// speeds are held within [1/4, 4] x the mean.
-TEST(Partition, SpeedShares) {
-  auto near = [](const std::vector<double>& a, const std::vector<double>& b) {
-    ASSERT_EQ(a.size(), b.size());
-    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 1e-15) << i;
-  };
-  near(speed_shares(std::vector<double>{1, 1}, std::vector<double>{1, 2}), {2.0 / 3, 1.0 / 3});
-  near(speed_shares(std::vector<double>{2, 1, 3}, std::vector<double>{2, 1, 3}),
-       {1.0 / 3, 1.0 / 3, 1.0 / 3});
-  near(speed_shares(std::vector<double>{1, 0}, std::vector<double>{1, 0}), {0.5, 0.5});
-  near(speed_shares(std::vector<double>{0, 0}, std::vector<double>{0, 0}), {0.5, 0.5});
-  // Speeds 1 and 100: mean 50.5, the slow one held at 50.5 / 4.
-  const double lo = 50.5 / 4;
-  near(speed_shares(std::vector<double>{1, 100}, std::vector<double>{1, 1}),
-       {lo / (lo + 100), 100 / (lo + 100)});
-  EXPECT_THROW(speed_shares(std::vector<double>{1}, std::vector<double>{1, 1}),
-               std::invalid_argument);
-}
-
 TEST(CellTree, LeavesTileDomainAndNest) {
   std::mt19937_64 rng(11);
   for (Curve curve : {Curve::Morton, Curve::Hilbert, Curve::Peano}) {
