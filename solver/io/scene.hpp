@@ -37,6 +37,21 @@ struct Region {
   }
 };
 
+// `rotate: {axis, angle}`: a right-handed rotation by `angle` degrees about `axis` through a
+// pivot the owner names (a box mesh's origin corner, a fluid box's min corner, a shogi piece's
+// base centre).
+struct RotationSpec {
+  Vec3 axis{1, 0, 0};
+  double angle = 0;  // degrees
+  bool none() const { return angle == 0; }
+  RotationSpec inverse() const { return {axis, -angle}; }
+  Vec3 apply(Vec3 p, Vec3 pivot) const {  // Rodrigues' formula
+    const Vec3 k = axis / norm(axis), r = p - pivot;
+    const double a = angle * 3.14159265358979323846 / 180.0, c = std::cos(a), sn = std::sin(a);
+    return pivot + c * r + sn * cross(k, r) + ((1 - c) * dot(k, r)) * k;
+  }
+};
+
 struct MeshSpec {
   enum class Kind { Box, Gmsh, Shogi } kind = Kind::Box;
   // box: origin + size, cells per axis; each hex split into 12 tets around a centre vertex
@@ -51,10 +66,8 @@ struct MeshSpec {
   // then translated.
   std::string piece = "king";
   double mesh_size = 0;
-  // box and shogi: rotation by `rotate_angle` degrees about `rotate_axis` (right-handed)
-  // through the box's origin corner or the piece's base centre.
-  Vec3 rotate_axis{1, 0, 0};
-  double rotate_angle = 0;
+  // box and shogi: rotation through the box's origin corner or the piece's base centre.
+  RotationSpec rotate;
 };
 
 struct BodySpec {
@@ -123,6 +136,7 @@ struct OutputSpec {
 struct FluidBoxSpec {
   Vec3 min{0, 0, 0}, max{0, 0, 0};
   int thickness_layers = 3;  // tanks: wall layers outside the inner box
+  RotationSpec rotate;       // blocks and walls: about `min` (the box is [min, max] before)
 };
 
 struct FluidSpec {

@@ -394,13 +394,15 @@ MaterialSpec parse_material(const Context& ctx, const std::string& name, const F
   return mat;
 }
 
-// `rotate: {axis, angle}` of a box or shogi mesh (degrees, right-handed).
-void parse_rotate(const Context& ctx, const Field& f, MeshSpec& mesh) {
+// `rotate: {axis, angle}` of a box or shogi mesh or a fluid box (degrees, right-handed).
+RotationSpec parse_rotate(const Context& ctx, const Field& f) {
   const MapView r(ctx, f, {"axis", "angle"});
   const Field axis = r.req("axis");
-  mesh.rotate_axis = axis.vec3();
-  if (!(norm(mesh.rotate_axis) > 0)) axis.fail("must not be the zero vector");
-  mesh.rotate_angle = r.req("angle").number();
+  RotationSpec rot;
+  rot.axis = axis.vec3();
+  if (!(norm(rot.axis) > 0)) axis.fail("must not be the zero vector");
+  rot.angle = r.req("angle").number();
+  return rot;
 }
 
 MeshSpec parse_mesh(const Context& ctx, const Field& f) {
@@ -418,11 +420,11 @@ MeshSpec parse_mesh(const Context& ctx, const Field& f) {
           v->choice({"king", "rook", "bishop", "gold", "silver", "knight", "lance", "pawn"});
     if (auto v = m.opt("mesh_size")) mesh.mesh_size = v->number(positive, "must be > 0");
     if (auto v = m.opt("translate")) mesh.translate = v->vec3();
-    if (auto v = m.opt("rotate")) parse_rotate(ctx, *v, mesh);
+    if (auto v = m.opt("rotate")) mesh.rotate = parse_rotate(ctx, *v);
   } else if (kind == "box") {
     const MapView m(ctx, f, {"type", "origin", "size", "cells", "rotate"});
     mesh.kind = MeshSpec::Kind::Box;
-    if (auto v = m.opt("rotate")) parse_rotate(ctx, *v, mesh);
+    if (auto v = m.opt("rotate")) mesh.rotate = parse_rotate(ctx, *v);
     if (auto v = m.opt("origin")) mesh.origin = v->vec3();
     const Field size = m.req("size");
     mesh.size = size.vec3();
@@ -547,8 +549,10 @@ ProbeSpec parse_probe(const Context& ctx, const Field& f, const std::vector<Body
 FluidBoxSpec parse_fluid_box(const Context& ctx, const Field& f, bool tank) {
   const MapView m(ctx, f,
                   tank ? std::vector<std::string>{"min", "max", "thickness_layers"}
-                       : std::vector<std::string>{"min", "max"});
+                       : std::vector<std::string>{"min", "max", "rotate"});
   FluidBoxSpec b;
+  if (!tank)
+    if (auto v = m.opt("rotate")) b.rotate = parse_rotate(ctx, *v);
   b.min = m.req("min").vec3();
   const Field mx = m.req("max");
   b.max = mx.vec3();
@@ -594,6 +598,8 @@ FluidSpec parse_fluid(const Context& ctx, const Field& f) {
   // With a periodic z every fluid box lies within the period (the lattice tiles it).
   auto in_period = [&](const Field& bf, const FluidBoxSpec& b) {
     if (!fl.periodic_z) return;
+    if (!b.rotate.none() && (b.rotate.axis.x != 0 || b.rotate.axis.y != 0))
+      bf.fail("rotate: in a periodic_z slab boxes may turn about z only (axis [0, 0, 1])");
     const double tol = 1e-9 * fl.spacing;
     if (b.min.z < (*fl.periodic_z)[0] - tol || b.max.z > (*fl.periodic_z)[1] + tol)
       bf.fail("must lie within fluid.periodic_z in z");

@@ -26,21 +26,15 @@ ShogiSize shogi_preset(const std::string& piece) {
   return ShogiSize::king();
 }
 
-// Rodrigues rotation of the mesh about the spec's axis through `pivot`, then `shift` added.
+// The mesh rotated by the spec's rotation through `pivot`, then `shift` added.
 void rotate_mesh(TetMesh& m, const MeshSpec& spec, Vec3 pivot, Vec3 shift) {
-  const Vec3 k = spec.rotate_axis / norm(spec.rotate_axis);
-  const double a = spec.rotate_angle * 3.14159265358979323846 / 180.0;
-  const double c = std::cos(a), sn = std::sin(a);
-  for (auto& p : m.points) {
-    const Vec3 r = p - pivot;
-    p = pivot + c * r + sn * cross(k, r) + ((1 - c) * dot(k, r)) * k + shift;
-  }
+  for (auto& p : m.points) p = spec.rotate.apply(p, pivot) + shift;
 }
 
 TetMesh make_body_mesh(const BodySpec& b) {
   if (b.mesh.kind == MeshSpec::Kind::Box) {
     TetMesh m = make_box(b.mesh.origin, b.mesh.size, b.mesh.cells);
-    if (b.mesh.rotate_angle != 0) rotate_mesh(m, b.mesh, b.mesh.origin, Vec3{});
+    if (!b.mesh.rotate.none()) rotate_mesh(m, b.mesh, b.mesh.origin, Vec3{});
     return m;
   }
   if (b.mesh.kind == MeshSpec::Kind::Shogi) {

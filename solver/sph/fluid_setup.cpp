@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/error.hpp"
 #include "model/model.hpp"
@@ -28,6 +29,45 @@ int up_axis(Vec3 g) {
   return a;
 }
 
+// Lattice point (i, j, k) of a box (cell centres at pitch dx from its min corner), turned by
+// the box's rotation about that corner.
+Vec3 box_point(const FluidBoxSpec& b, int i, int j, int k, double dx) {
+  const Vec3 x{b.min.x + (i + 0.5) * dx, b.min.y + (j + 0.5) * dx, b.min.z + (k + 0.5) * dx};
+  return b.rotate.none() ? x : b.rotate.apply(x, b.min);
+}
+
+// How far the ray from x (inside the box) along `up` (unit) runs before it leaves the box:
+// the depth below the box's top that the hydrostatic start uses. An unrotated box under
+// gravity along an axis: its top minus x (up = +axis) or x minus its bottom (up = -axis).
+double depth_in_box(const FluidBoxSpec& b, Vec3 x, Vec3 up) {
+  int axis = -1, nonzero = 0;
+  for (int a = 0; a < 3; ++a)
+    if (up[a] != 0) axis = a, ++nonzero;
+  if (b.rotate.none() && nonzero == 1)
+    return up[axis] > 0 ? b.max[axis] - x[axis] : x[axis] - b.min[axis];
+  const RotationSpec back = b.rotate.inverse();
+  const Vec3 q = back.apply(x, b.min) - b.min, u = back.apply(b.min + up, b.min) - b.min;
+  double t = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    if (u[a] > 0) t = std::min(t, (b.max[a] - b.min[a] - q[a]) / u[a]);
+    if (u[a] < 0) t = std::min(t, -q[a] / u[a]);
+  }
+  return std::max(t, 0.0);
+}
+
+// The extent of a (turned) box along `up` (unit): top minus bottom of its 8 corners.
+double box_height(const FluidBoxSpec& b, Vec3 up) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 corner{c & 1 ? b.max.x : b.min.x, c & 2 ? b.max.y : b.min.y,
+                      c & 4 ? b.max.z : b.min.z};
+    const double h = dot(b.rotate.apply(corner, b.min), up);
+    lo = std::min(lo, h);
+    hi = std::max(hi, h);
+  }
+  return hi - lo;
+}
+
 }  // namespace
 
 FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
@@ -37,10 +77,15 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
   const double gmag = norm(gravity);
   const int up = up_axis(gravity);
   const double up_sign = gravity[up] > 0 ? -1.0 : 1.0;  // +1: up is +axis
+  Vec3 up_dir{0, 0, 0};  // against gravity (the up axis without gravity)
+  if (gmag > 0)
+    up_dir = gravity / -gmag;
+  else
+    up_dir[up] = 1.0;
   const double rho0 = spec.density;
   const double mass = rho0 * dx * dx * dx;
 
-  for (const auto& b : spec.blocks) f.height = std::max(f.height, b.max[up] - b.min[up]);
+  for (const auto& b : spec.blocks) f.height = std::max(f.height, box_height(b, up_dir));
   double c0 = 0;
   if (spec.sound_speed) {
     c0 = *spec.sound_speed;
@@ -79,19 +124,17 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
     f.gid.push_back(f.gid.size());
   };
 
-  // Fluid blocks: lattice points at cell centres, hydrostatic pressure below each block's top.
+  // Fluid blocks: lattice points at cell centres, hydrostatic pressure below each block's top
+  // (along gravity: a turned block's depth runs to its face above the particle).
   for (std::size_t bi = 0; bi < spec.blocks.size(); ++bi) {
     const auto& b = spec.blocks[bi];
     const auto n = lattice(b.min, b.max, dx);
-    const double top = up_sign > 0 ? b.max[up] : -b.min[up];
     const std::int64_t before = f.size();
     for (int k = 0; k < n[2]; ++k)
       for (int j = 0; j < n[1]; ++j)
         for (int i = 0; i < n[0]; ++i) {
-          const Vec3 x{b.min.x + (i + 0.5) * dx, b.min.y + (j + 0.5) * dx,
-                       b.min.z + (k + 0.5) * dx};
-          const double depth = top - up_sign * x[up];
-          add(x, kSphFluid, spec.hydrostatic_init ? rho0 * gmag * depth : 0.0);
+          const Vec3 x = box_point(b, i, j, k, dx);
+          add(x, kSphFluid, spec.hydrostatic_init ? rho0 * gmag * depth_in_box(b, x, up_dir) : 0.0);
         }
     if (f.size() == before) throw InputError(fmt::format("fluid.blocks[{}]: no particle", bi));
   }
@@ -127,9 +170,7 @@ FluidSetup build_fluid(const FluidSpec& spec, Vec3 gravity) {
     const auto n = lattice(w.min, w.max, dx);
     for (int k = 0; k < n[2]; ++k)
       for (int j = 0; j < n[1]; ++j)
-        for (int i = 0; i < n[0]; ++i)
-          add({w.min.x + (i + 0.5) * dx, w.min.y + (j + 0.5) * dx, w.min.z + (k + 0.5) * dx},
-              kSphWall, 0.0);
+        for (int i = 0; i < n[0]; ++i) add(box_point(w, i, j, k, dx), kSphWall, 0.0);
   }
   f.n_wall = f.size() - f.n_fluid;
 
