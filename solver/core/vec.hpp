@@ -45,6 +45,10 @@ QDEMSPH_HD Vec3 cross(Vec3 a, Vec3 b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 QDEMSPH_HD double norm2(Vec3 a) { return dot(a, a); }
+// v without the components named by bits 0..2 of `held` (x, y, z): those set to zero.
+QDEMSPH_HD Vec3 unheld(Vec3 v, unsigned held) {
+  return {held & 1u ? 0.0 : v.x, held & 2u ? 0.0 : v.y, held & 4u ? 0.0 : v.z};
+}
 QDEMSPH_HD double norm(Vec3 a) { return sqrt(dot(a, a)); }
 
 struct Mat3 {

@@ -61,6 +61,7 @@ struct SolidViews {
   Vec3CView x;
   Vec3View v, f, fc;
   View<const double> inv_mass;
+  View<const std::uint8_t> held;  // components held by constraints (bits x, y, z)
 };
 
 class Backend {

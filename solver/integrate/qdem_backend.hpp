@@ -47,6 +47,9 @@ class QdemBackend final : public Backend {
     mass_.assign(m.mass);
     inv_mass_.assign(m.inv_mass);
     relax_inv_mass_.assign(m.relax_inv_mass);
+    std::vector<std::uint8_t> held(nv_);
+    for (std::int64_t i = 0; i < nv_; ++i) held[i] = held_components(m.flags[i]);
+    held_.assign(held);
     x0_.resize(nv_);  // relaxation start state (mark_relax_start)
     f0_.resize(nv_);
     diss_v_.resize(nv_);
@@ -191,16 +194,19 @@ class QdemBackend final : public Backend {
     s.f = f_.view();
     s.fc = fc_.view();
     s.inv_mass = inv_mass_.cview();
+    s.held = held_.cview();
     return s;
   }
 
+  // Held components (a `fixed` constraint with `components`) keep their zero velocity.
   void kick(double h) override {
     const auto f = f_.cview();
     const auto im = inv_mass_.cview();
+    const auto held = held_.cview();
     const auto v = v_.view();
     for_each(
         Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-          if (im[i] > 0) v.set(i, v[i] + (h * im[i]) * f[i]);
+          if (im[i] > 0) v.set(i, v[i] + unheld((h * im[i]) * f[i], held[i]));
         });
   }
 
@@ -214,13 +220,14 @@ class QdemBackend final : public Backend {
   void damped_step(double dt, double c) override {
     const auto f = f_.cview();
     const auto im = relax_inv_mass_.cview();
+    const auto held = held_.cview();
     const auto v = v_.view();
     const auto x = x_.view();
     const double a = (1 - 0.5 * c * dt) / (1 + 0.5 * c * dt), b = dt / (1 + 0.5 * c * dt);
     for_each(
         Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
           if (im[i] > 0) {
-            const Vec3 vi = a * v[i] + (b * im[i]) * f[i];
+            const Vec3 vi = a * v[i] + unheld((b * im[i]) * f[i], held[i]);
             v.set(i, vi);
             x.set(i, x[i] + dt * vi);
           }
@@ -249,9 +256,12 @@ class QdemBackend final : public Backend {
   StaticStats static_stats() override {
     const auto f = f_.cview(), x = x_.cview(), x0 = x0_.cview(), f0 = f0_.cview();
     const auto im = inv_mass_.cview(), rim = relax_inv_mass_.cview();
+    const auto held = held_.cview();
     StaticStats s;
     s.residual_max = reduce_max(
-        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return im[i] > 0 ? norm(f[i]) : 0.0; }, 0.0);
+        Exec{}, nfv_,
+        QDEMSPH_LAMBDA(std::int64_t i) { return im[i] > 0 ? norm(unheld(f[i], held[i])) : 0.0; },
+        0.0);
     s.rayleigh_num = reduce_sum(
         Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
           return rim[i] > 0 ? dot(x[i] - x0[i], f0[i] - f[i]) : 0.0;
@@ -500,9 +510,9 @@ class QdemBackend final : public Backend {
 
   std::size_t device_bytes() const override {
     return X_.bytes() + x_.bytes() + v_.bytes() + f_.bytes() + fext_.bytes() + fpre_.bytes() +
-           mass_.bytes() + inv_mass_.bytes() + relax_inv_mass_.bytes() + diss_v_.bytes() +
-           tv_.bytes() + dxi_.bytes() + vol0_.bytes() + tmat_.bytes() + tf_.bytes() +
-           diss_t_.bytes() + csr_off_.bytes() + csr_ent_.bytes() + fc_.bytes() +
+           mass_.bytes() + inv_mass_.bytes() + relax_inv_mass_.bytes() + held_.bytes() +
+           diss_v_.bytes() + tv_.bytes() + dxi_.bytes() + vol0_.bytes() + tmat_.bytes() +
+           tf_.bytes() + diss_t_.bytes() + csr_off_.bytes() + csr_ent_.bytes() + fc_.bytes() +
            (contact_ ? contact_->bytes() : 0);
   }
 
@@ -517,6 +527,7 @@ class QdemBackend final : public Backend {
   Buffer<double> mass_{S}, inv_mass_{S}, relax_inv_mass_{S}, diss_v_{S}, dxi_{S}, vol0_{S},
       diss_t_{S};
   Buffer<std::int32_t> tv_{S}, tmat_{S};
+  Buffer<std::uint8_t> held_{S};  // per vertex: held components (bits x, y, z)
   Buffer<Material> mats_{S};
   Buffer<std::int64_t> csr_off_{S}, csr_ent_{S};
   Buffer<unsigned long long> flag_{S};

@@ -83,7 +83,8 @@ struct ConstraintSpec {
   enum class Kind { Fixed, Velocity } kind = Kind::Fixed;
   int body = 0;
   Region region;
-  Vec3 velocity{0, 0, 0};  // Velocity: prescribed vertex velocity
+  std::array<bool, 3> components{true, true, true};  // Fixed: the held components (x, y, z)
+  Vec3 velocity{0, 0, 0};                            // Velocity: prescribed vertex velocity
 };
 
 struct LoadSpec {

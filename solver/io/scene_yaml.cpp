@@ -484,10 +484,20 @@ ConstraintSpec parse_constraint(const Context& ctx, const Field& f,
     ctx.fail(f.node(), type.path(), "required key is missing", false);
   ConstraintSpec c;
   if (type.choice({"fixed", "velocity"}) == "fixed") {
-    const MapView m(ctx, f, {"type", "body", "region"});
+    const MapView m(ctx, f, {"type", "body", "region", "components"});
     c.kind = ConstraintSpec::Kind::Fixed;
     c.body = lookup(m.req("body"), bodies, "body", "bodies");
     c.region = parse_region(ctx, m.req("region"));
+    if (auto v = m.opt("components")) {
+      const std::vector<Field> list = v->list();
+      if (list.empty()) v->fail("name at least one of x, y, z");
+      c.components = {false, false, false};
+      for (const Field& e : list) {
+        const int a = e.choice({"x", "y", "z"})[0] - 'x';
+        if (c.components[a]) e.fail("named twice");
+        c.components[a] = true;
+      }
+    }
   } else {
     const MapView m(ctx, f, {"type", "body", "region", "velocity"});
     c.kind = ConstraintSpec::Kind::Velocity;

@@ -198,6 +198,15 @@ Model assemble(const Scene& scene) {
     for (std::int64_t i = b.v_begin; i < b.v_end; ++i) {
       if (!cs.region.contains(model.X[i])) continue;
       ++count;
+      const auto& held = cs.components;
+      if (cs.kind == ConstraintSpec::Kind::Fixed && !(held[0] && held[1] && held[2])) {
+        for (int a = 0; a < 3; ++a)
+          if (held[a]) {
+            model.flags[i] |= static_cast<std::uint8_t>(kHoldX << a);
+            model.v[i][a] = 0;
+          }
+        continue;
+      }
       model.inv_mass[i] = 0;
       if (cs.kind == ConstraintSpec::Kind::Fixed) {
         model.flags[i] |= kFixed;

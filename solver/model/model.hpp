@@ -19,7 +19,16 @@
 
 namespace qdemsph {
 
-enum VertexFlag : std::uint8_t { kFixed = 1, kPrescribed = 2, kSurface = 4 };
+enum VertexFlag : std::uint8_t {
+  kFixed = 1,
+  kPrescribed = 2,
+  kSurface = 4,
+  kHoldX = 8,  // a held component (a `fixed` constraint with `components`): bit kHoldX << a
+  kHoldY = 16,
+  kHoldZ = 32
+};
+// The held components of a vertex's flags as bits 0..2 (x, y, z).
+inline std::uint8_t held_components(std::uint8_t flags) { return (flags / kHoldX) & 7; }
 
 struct BodyRange {
   std::string name;

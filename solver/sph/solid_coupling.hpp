@@ -111,7 +111,7 @@ class SolidCoupling {
           s.fc.set(vi, fn);
           s.f.set(vi, s.f[vi] + d);
           const double im = s.inv_mass[vi];
-          if (im > 0) s.v.set(vi, s.v[vi] + (hh * im) * d);
+          if (im > 0) s.v.set(vi, s.v[vi] + unheld((hh * im) * d, s.held[vi]));
         });
   }
 
