@@ -62,13 +62,16 @@ class MpiFluidExchange final : public FluidExchange {
     const std::int64_t nown = mp.n_new();
 
     // Ghosts: the band cells of this rank's owned particles, published to all; a particle
-    // goes to every other rank with an owned particle in the 5^3 cells around its own.
+    // goes to every other rank with an owned particle in the 5^3 cells around its own. A cell
+    // whose 5^3 cells lie inside this rank's piece has no other rank's particle around it, so
+    // only the others (near the piece's border) are published.
     std::vector<std::uint64_t> mine(nown);
     for (std::int64_t i = 0; i < nown; ++i) mine[i] = cell_key(o.x[i]);
     std::sort(mine.begin(), mine.end());
     mine.erase(std::unique(mine.begin(), mine.end()), mine.end());
     std::vector<std::pair<std::uint64_t, std::int64_t>> pub;
-    for (auto c : mine) pub.push_back({c, me_});
+    for (auto c : mine)
+      if (!interior(c)) pub.push_back({c, me_});
     std::unordered_map<std::uint64_t, std::vector<int>> occupied;  // cell -> other ranks
     for (const auto& [c, r] : allgatherv(comm_, pub))
       if (r != me_) occupied[c].push_back(static_cast<int>(r));
@@ -130,6 +133,47 @@ class MpiFluidExchange final : public FluidExchange {
   std::uint64_t cell_key(Vec3 p) const {
     const BandCell c = band_cell(p, band_);
     return band_key(c.i[0], c.i[1], c.i[2]);
+  }
+
+  // True when every point of the 5^3 band cells around cell `key` belongs to this rank: the
+  // box lies in at most 2 x 2 x 2 cells of some tree level, and each of their curve segments
+  // (keys are hierarchical, sfc.hpp) lies in this rank's piece. Conservative: false may be
+  // answered for an interior cell (it is then published needlessly), never true for another.
+  bool interior(std::uint64_t key) const {
+    const SfcGrid& g = dec_.grid;
+    const std::uint64_t first = dec_.splitters[me_], last = dec_.splitters[me_ + 1];
+    if (first >= last) return false;
+    constexpr std::int64_t off = std::int64_t{1} << 20;
+    const std::int64_t c[3] = {static_cast<std::int64_t>(key >> 42) - off,
+                               static_cast<std::int64_t>((key >> 21) & 0x1fffff) - off,
+                               static_cast<std::int64_t>(key & 0x1fffff) - off};
+    // The box's finest cells, one more on each side against round-off in band_cell's floor.
+    std::uint32_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = g.coord(double(c[a] - 2) * band_, g.lo[a]);
+      hi[a] = g.coord(double(c[a] + 3) * band_, g.lo[a]);
+      lo[a] -= lo[a] > 0;
+      hi[a] += hi[a] + 1 < g.side();
+    }
+    const std::uint32_t base = curve_base(g.curve);
+    std::uint32_t s = 1;  // finest cells per side of a cell of the level
+    std::uint64_t span = 1;
+    auto fits = [&] {
+      for (int a = 0; a < 3; ++a)
+        if (hi[a] / s - lo[a] / s > 1) return false;
+      return true;
+    };
+    for (int l = g.order; l > 0 && !fits(); --l)
+      s *= base, span *= std::uint64_t(base) * base * base;
+    if (!fits()) return false;
+    for (std::uint32_t x = lo[0] / s; x <= hi[0] / s; ++x)
+      for (std::uint32_t y = lo[1] / s; y <= hi[1] / s; ++y)
+        for (std::uint32_t z = lo[2] / s; z <= hi[2] / s; ++z) {
+          const std::uint64_t k = sfc_key(g.curve, x * s, y * s, z * s, g.order);
+          const std::uint64_t seg = k - k % span;
+          if (seg < first || seg + span > last) return false;
+        }
+    return true;
   }
 
   // Every rebalance_every calls: the owned cost's max / mean - 1 over the ranks against the
