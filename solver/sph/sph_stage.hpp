@@ -100,8 +100,9 @@ class SphStage final : public FluidStage {
         nm_(f.n_marker),
         wall_volume_(f.dx * f.dx * f.dx),
         ex_(std::move(exchange)) {
-    grid_ =
+    grid_all_ =
         CellGrid::cover(f.lo, f.hi, P_.kernel.support() / kSphCellsPerSupport, f.z0, f.period_z);
+    grid_ = grid_all_;
     start_.resize(kSphGroups * grid_.count() + 1);
     if (ex_) {
       if (nm_ > 0)
@@ -113,7 +114,7 @@ class SphStage final : public FluidStage {
             "fluid.periodic_z: a periodic fluid is not distributed over MPI ranks yet; run it "
             "on one rank (docs/parallel.md)");
     }
-    if (double(kSphGroups) * double(grid_.count()) >= std::ldexp(1.0, 64 - kSphKeyShift))
+    if (double(kSphGroups) * double(grid_all_.count()) >= std::ldexp(1.0, 64 - kSphKeyShift))
       throw InputError(
           "fluid: too many neighbour cells for the particle order keys (coarsen "
           "fluid.spacing or shrink the fluid's box)");
@@ -430,14 +431,19 @@ class SphStage final : public FluidStage {
     permute(type_, tmpt_, ord);
     permute(gid_, tmpu_, ord);
     permute(slot_, tmpi_, ord);
-    // The order key of each particle: its bucket and its place in it.
+    // The order key of each particle: its bucket (in the whole box's grid) and its place in it.
     const auto key = key_.view();
     const auto kc = keys_.cview();
     const std::int64_t* start = start_.cview().p;
+    const std::int64_t nca = grid_all_.count();
     for_each(
         Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
           const std::int64_t b = kc[ord[i]];
-          key[i] = (static_cast<std::uint64_t>(b) << kSphKeyShift) |
+          const std::int64_t q = b / nc, c = b - q * nc;
+          const std::int64_t cx = c % g.n[0] + g.first[0], cy = c / g.n[0] % g.n[1] + g.first[1],
+                             cz = c / (std::int64_t(g.n[0]) * g.n[1]) + g.first[2];
+          const std::int64_t ba = q * nca + (cz * g.full[1] + cy) * g.full[0] + cx;
+          key[i] = (static_cast<std::uint64_t>(ba) << kSphKeyShift) |
                    static_cast<std::uint64_t>(i - start[b]);
         });
   }
@@ -481,6 +487,19 @@ class SphStage final : public FluidStage {
               in_order(q.gid), in_order(q.key));
     slot_.assign(ord);
     n_own_ = nown;
+    // The neighbour grid: the window of the whole box's cells that holds this rank's particles.
+    int lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = grid_all_.n[a] - 1;
+      for (const Vec3& p : q.x) {
+        const int c = grid_all_.coord(p[a], a);
+        lo[a] = std::min(lo[a], c), hi[a] = std::max(hi[a], c);
+      }
+      if (q.x.empty()) lo[a] = 0;  // no particle: one cell
+      hi[a] = std::max(hi[a], lo[a]);
+    }
+    grid_ = grid_all_.window(lo, hi);
+    start_.resize(kSphGroups * grid_.count() + 1);
   }
 
   // Distributed: rho, p, m of the ghosts from their owners; their p / rho^2 as the owners have it.
@@ -556,7 +575,8 @@ class SphStage final : public FluidStage {
   Buffer<std::uint8_t> type_{S}, tmpt_{S};
   Buffer<std::uint64_t> gid_{S}, key_{S}, tmpu_{S};
   Buffer<std::int64_t> slot_{S}, tmpi_{S};
-  CellGrid grid_;
+  CellGrid grid_all_;  // the whole fluid box
+  CellGrid grid_;      // the cells searched: the whole box, or a rank's window of it
   Buffer<std::int64_t> keys_{S}, start_{S}, order_{S}, scratch_{S};
   std::unique_ptr<SolidCoupling<Exec>> coupling_;  // null without bodies
   std::unique_ptr<FluidExchange> ex_;              // null on one rank
