@@ -26,6 +26,7 @@
 #include "sph/fluid_stage.hpp"
 #ifdef QDEMSPH_HAVE_MPI
 #include "parallel/distributed_backend.hpp"
+#include "parallel/fluid_exchange.hpp"
 #include "parallel/world.hpp"
 #endif
 
@@ -168,10 +169,6 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
 #ifdef QDEMSPH_HAVE_MPI
   DistributedBackend* dist = nullptr;
   if (world().size > 1) {
-    if (scene.fluid.present)
-      throw InputError(
-          "fluid: SPH particles are not distributed over MPI ranks yet; run scenes "
-          "with fluid on one rank (docs/parallel.md)");
     auto d = make_distributed_backend(std::move(be), parallel_options(scene.parallel));
     dist = d.get();
     be = std::move(d);
@@ -194,9 +191,18 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
                       "(CFL with c0 = {:.4g} m/s)",
                       *scene.run.dt, dtf, fluid_setup->params.eos.c0));
     dt = fluid_step(model, scene, dt, dtf, solid_substeps);
+    // Under mpirun the particles are distributed too (parallel/fluid_exchange.hpp).
+    std::unique_ptr<FluidExchange> exchange;
+#ifdef QDEMSPH_HAVE_MPI
+    if (distributed)
+      exchange = make_fluid_exchange(parallel_options(scene.parallel),
+                                     fluid_setup->params.kernel.support());
+#endif
+    // Distributed, a coupled fluid is refused by the stage (an input error naming the key).
     SolidViews solid;
-    if (fluid_setup->n_marker > 0) solid = be->solid_views();
-    fluid = make_fluid_stage(backend_name, *fluid_setup, fluid_setup->n_marker ? &solid : nullptr);
+    if (fluid_setup->n_marker > 0 && !exchange) solid = be->solid_views();
+    fluid = make_fluid_stage(backend_name, *fluid_setup, fluid_setup->n_marker ? &solid : nullptr,
+                             std::move(exchange));
   }
   const std::filesystem::path dir = opt.out.value_or(scene.output.dir);
   const CheckpointSpec& cks = scene.output.checkpoint;
@@ -240,19 +246,20 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   PhaseTimers& timers = st.timers();
   std::optional<FluidWriter> fluid_out;
   std::FILE* fluid_csv = nullptr;
-  if (fluid) {
-    st.attach_fluid(fluid.get(), solid_substeps);
-    fluid_out.emplace(dir, resume.fluid_frames);
-    const std::string header =
-        "time,kinetic,px,py,pz,v_max,rho_dev,x_max,y_max,dt_limit,fbx,fby,fbz\n";
-    if (resume.fluid_csv_bytes >= 0) {
-      fluid_csv = reopen_for_append(dir / "fluid.csv", resume.fluid_csv_bytes, header);
-    } else {
-      fluid_csv = std::fopen((dir / "fluid.csv").c_str(), "w");
-      if (!fluid_csv) throw InputError("cannot create '" + (dir / "fluid.csv").string() + "'");
-      std::fputs(header.c_str(), fluid_csv);
-    }
-  }
+  if (fluid) st.attach_fluid(fluid.get(), solid_substeps);
+  if (fluid && root)
+    on_root(distributed, [&] {
+      fluid_out.emplace(dir, resume.fluid_frames);
+      const std::string header =
+          "time,kinetic,px,py,pz,v_max,rho_dev,x_max,y_max,dt_limit,fbx,fby,fbz\n";
+      if (resume.fluid_csv_bytes >= 0) {
+        fluid_csv = reopen_for_append(dir / "fluid.csv", resume.fluid_csv_bytes, header);
+      } else {
+        fluid_csv = std::fopen((dir / "fluid.csv").c_str(), "w");
+        if (!fluid_csv) throw InputError("cannot create '" + (dir / "fluid.csv").string() + "'");
+        std::fputs(header.c_str(), fluid_csv);
+      }
+    });
   if (restart)
     restore_checkpoint(*restart, restart_path.string(), scene, model, dt, *be, fluid.get(), fsetup,
                        st);
@@ -319,8 +326,11 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       on_root(distributed,
               [&] { fields->write(st.time(), st.steps(), h.x, h.v, h.stress, h.von_mises); });
     if (fluid) {
-      const FluidHost fh = fluid->download();
-      fluid_out->write(st.time(), st.steps(), fh.x, fh.v, fh.p, fh.rho, fh.type, fh.gid);
+      const FluidHost fh = fluid->download();  // distributed: every particle on rank 0
+      if (root)
+        on_root(distributed, [&] {
+          fluid_out->write(st.time(), st.steps(), fh.x, fh.v, fh.p, fh.rho, fh.type, fh.gid);
+        });
     }
   };
   auto write_probes = [&] {
@@ -334,6 +344,8 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     if (fluid) {
       const FluidStats fs = fluid->stats();
       const FluidHost fh = fluid->download();
+      const double dt_limit = fluid->dt_limits().min();
+      if (!root) return;
       double xm = -1e300, ym = -1e300;
       for (std::size_t i = 0; i < fh.x.size(); ++i)
         if (fh.type[i] == kSphFluid) xm = std::max(xm, fh.x[i].x), ym = std::max(ym, fh.x[i].y);
@@ -342,8 +354,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
           "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.6g},{:.9g},{:.9g},"
           "{:.9g}\n",
           st.time(), fs.kinetic, fs.momentum.x, fs.momentum.y, fs.momentum.z, fs.v_max, fs.rho_dev,
-          xm, ym, fluid->dt_limits().min(), fs.force_on_bodies.x, fs.force_on_bodies.y,
-          fs.force_on_bodies.z);
+          xm, ym, dt_limit, fs.force_on_bodies.x, fs.force_on_bodies.y, fs.force_on_bodies.z);
       std::fflush(fluid_csv);
     }
   };

@@ -119,6 +119,11 @@ void Stepper::check(bool dynamic) const {
       if (dt_ > kFluidDtGuard * l.min()) {
         // The failure path only: find the fastest and the most accelerated fluid particle.
         const FluidState s = fluid_->save_state();
+        if (s.x.empty())  // a distributed run's ranks but 0 (rank 0 has every particle and reports)
+          throw SimulationError(fmt::format(
+              "step {} (t = {:.6e} s): the fluid step {:.3e} s exceeds {} x the fluid's stability "
+              "limit {:.3e} s",
+              n_, t_, dt_, kFluidDtGuard, l.min()));
         std::size_t iv = 0, ia = 0;
         for (std::size_t i = 0; i < s.x.size(); ++i) {
           if (s.type[i] != kSphFluid) continue;

@@ -36,6 +36,11 @@ struct CellGrid {
   Vec3 origin{0, 0, 0};
   double cell = 1, inv_cell = 1;
   int n[3] = {1, 1, 1};
+  // A window of a larger grid (window()): cells [first, first + n) of a grid of `full` cells
+  // per axis; coordinates are those of the full grid (clamped to it) less `first`, so a cell
+  // has the same place in both and neighbour walks visit cells in the same order.
+  int first[3] = {0, 0, 0};
+  int full[3] = {1, 1, 1};
 
   double period_z = 0;  // > 0: periodic in z with this period
 
@@ -46,7 +51,7 @@ struct CellGrid {
     const int nz = std::max(1, static_cast<int>(std::floor(period_z / min_cell)));
     CellGrid g = cover(lo, hi, period_z / nz);
     g.origin.z = z0;
-    g.n[2] = nz;
+    g.full[2] = g.n[2] = nz;
     g.period_z = period_z;
     return g;
   }
@@ -57,7 +62,16 @@ struct CellGrid {
     g.cell = min_cell;
     g.inv_cell = 1.0 / min_cell;
     for (int a = 0; a < 3; ++a)
-      g.n[a] = std::max(1, static_cast<int>(std::ceil((hi[a] - lo[a]) / min_cell)));
+      g.full[a] = g.n[a] = std::max(1, static_cast<int>(std::ceil((hi[a] - lo[a]) / min_cell)));
+    return g;
+  }
+  // The cells [lo, hi] (coordinates of this grid, inclusive) as a grid of their own.
+  CellGrid window(const int lo[3], const int hi[3]) const {
+    CellGrid g = *this;
+    for (int a = 0; a < 3; ++a) {
+      g.first[a] = first[a] + lo[a];
+      g.n[a] = hi[a] - lo[a] + 1;
+    }
     return g;
   }
   std::int64_t count() const { return std::int64_t(n[0]) * n[1] * n[2]; }
@@ -68,6 +82,8 @@ struct CellGrid {
       c %= n[2];
       return c < 0 ? c + n[2] : c;
     }
+    c = c < 0 ? 0 : c;
+    c = (c >= full[a] ? full[a] - 1 : c) - first[a];
     c = c < 0 ? 0 : c;
     return c >= n[a] ? n[a] - 1 : c;
   }

@@ -10,6 +10,8 @@
 #include "core/error.hpp"
 #include "core/timers.hpp"
 #include "parallel/balance.hpp"
+#include "parallel/band_cells.hpp"
+#include "parallel/collectives.hpp"
 #include "parallel/comm_plan.hpp"
 #include "parallel/distributed_backend_mpi.hpp"
 #include "parallel/local_model.hpp"
@@ -26,39 +28,6 @@ ParallelOptions parallel_options(const ParallelSpec& spec) {
 }
 
 namespace {
-
-// All ranks' items (any trivially copyable type), in rank order. bytes += what this rank sent.
-template <class T>
-std::vector<T> allgatherv(MPI_Comm comm, const std::vector<T>& mine,
-                          std::int64_t* bytes = nullptr) {
-  int np = 1;
-  MPI_Comm_size(comm, &np);
-  int n = static_cast<int>(mine.size() * sizeof(T));
-  std::vector<int> counts(np), displs(np + 1, 0);
-  MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
-  for (int r = 0; r < np; ++r) displs[r + 1] = displs[r] + counts[r];
-  std::vector<T> all(displs[np] / sizeof(T));
-  MPI_Allgatherv(mine.data(), n, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE,
-                 comm);
-  if (bytes) *bytes += std::int64_t(n) * (np - 1);
-  return all;
-}
-
-// All ranks' items on rank 0 (empty elsewhere).
-template <class T>
-std::vector<T> gatherv(MPI_Comm comm, const std::vector<T>& mine) {
-  int np = 1, me = 0;
-  MPI_Comm_size(comm, &np);
-  MPI_Comm_rank(comm, &me);
-  int n = static_cast<int>(mine.size() * sizeof(T));
-  std::vector<int> counts(np), displs(np + 1, 0);
-  MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
-  for (int r = 0; r < np; ++r) displs[r + 1] = displs[r] + counts[r];
-  std::vector<T> all(me == 0 ? displs[np] / sizeof(T) : 0);
-  MPI_Gatherv(mine.data(), n, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, 0,
-              comm);
-  return all;
-}
 
 // Every rank's slice on rank 0, concatenated in rank order, the contact dissipation summed
 // (other ranks: empty).
@@ -92,38 +61,6 @@ StateSlice gather_slices(MPI_Comm comm, const StateSlice& s) {
 template <class T>
 CommField cfield(const std::vector<T>& v) {
   return comm_field(const_cast<T*>(v.data()), static_cast<std::int64_t>(v.size()));
-}
-
-// Band cells: a fixed grid of width `band` anchored at the origin; coordinates packed in 21
-// bits each (offset by 2^20; the grid spans +-2^20 cells).
-std::uint64_t band_key(std::int64_t ix, std::int64_t iy, std::int64_t iz) {
-  constexpr std::int64_t off = std::int64_t{1} << 20, top = (std::int64_t{1} << 21) - 1;
-  auto c = [&](std::int64_t i) {
-    return static_cast<std::uint64_t>(std::clamp(i + off, std::int64_t{0}, top));
-  };
-  return (c(ix) << 42) | (c(iy) << 21) | c(iz);
-}
-
-struct BandCell {
-  std::int64_t i[3];
-};
-
-BandCell band_cell(Vec3 p, double band) {
-  // Clamped before the conversion (a blown-up run's NaN or huge values stay defined; the
-  // run-time checks report them).
-  auto c = [&](double v) {
-    const double q = std::floor(v / band);
-    return static_cast<std::int64_t>(q > -2e6 ? (q < 2e6 ? q : 2e6) : -2e6);
-  };
-  return {{c(p.x), c(p.y), c(p.z)}};
-}
-
-// The 5^3 cells within two cells of c: any point within 2 band widths of a point of c.
-template <class F>
-void for_each_band_neighbour(const BandCell& c, F f) {
-  for (int a = -2; a <= 2; ++a)
-    for (int b = -2; b <= 2; ++b)
-      for (int d = -2; d <= 2; ++d) f(band_key(c.i[0] + a, c.i[1] + b, c.i[2] + d));
 }
 
 // Free and global ids of the global model's vertices for anchor_slot (fixed: no owner).

@@ -6,9 +6,9 @@
 
 namespace qdemsph {
 
-std::unique_ptr<FluidStage> make_fluid_stage_cuda(const FluidSetup& setup,
-                                                  const SolidViews* solid) {
-  return std::make_unique<SphStage<CudaExec>>(setup, solid);
+std::unique_ptr<FluidStage> make_fluid_stage_cuda(const FluidSetup& setup, const SolidViews* solid,
+                                                  std::unique_ptr<FluidExchange> exchange) {
+  return std::make_unique<SphStage<CudaExec>>(setup, solid, std::move(exchange));
 }
 
 }  // namespace qdemsph

@@ -5,15 +5,18 @@
 namespace qdemsph {
 
 #ifdef QDEMSPH_HAVE_CUDA
-std::unique_ptr<FluidStage> make_fluid_stage_cuda(const FluidSetup& setup,
-                                                  const SolidViews* solid);  // fluid_cuda.cu
+std::unique_ptr<FluidStage> make_fluid_stage_cuda(
+    const FluidSetup& setup, const SolidViews* solid,
+    std::unique_ptr<FluidExchange> exchange);  // fluid_cuda.cu
 #endif
 
 std::unique_ptr<FluidStage> make_fluid_stage(const std::string& backend, const FluidSetup& setup,
-                                             const SolidViews* solid) {
-  if (backend == "cpu") return std::make_unique<SphStage<HostExec>>(setup, solid);
+                                             const SolidViews* solid,
+                                             std::unique_ptr<FluidExchange> exchange) {
+  if (backend == "cpu")
+    return std::make_unique<SphStage<HostExec>>(setup, solid, std::move(exchange));
 #ifdef QDEMSPH_HAVE_CUDA
-  if (backend == "cuda") return make_fluid_stage_cuda(setup, solid);
+  if (backend == "cuda") return make_fluid_stage_cuda(setup, solid, std::move(exchange));
 #endif
   throw InputError("the SPH fluid stage has no '" + backend + "' backend in this build");
 }

@@ -20,6 +20,7 @@
 #include "core/vec.hpp"
 #include "integrate/backend.hpp"
 #include "physics/sph_timestep.hpp"
+#include "sph/fluid_exchange.hpp"
 #include "sph/fluid_setup.hpp"
 
 namespace qdemsph {
@@ -74,7 +75,12 @@ class FluidStage {
 
 // "cpu" or "cuda" (the latter where a CUDA build provides it; else InputError). `solid`: the
 // bodies' state (Backend::solid_views) when the setup has body markers, else null.
+// `exchange`: a distributed run's (parallel/fluid_exchange.hpp), else null. Distributed, the
+// counts are global, download() and save_state() give rank 0 every particle in the one-rank
+// order (other ranks: empty), load_state() takes the whole state on every rank, and every call
+// but size(), n_fluid(), n_marker(), device_bytes() and params() is collective.
 std::unique_ptr<FluidStage> make_fluid_stage(const std::string& backend, const FluidSetup& setup,
-                                             const SolidViews* solid = nullptr);
+                                             const SolidViews* solid = nullptr,
+                                             std::unique_ptr<FluidExchange> exchange = nullptr);
 
 }  // namespace qdemsph

@@ -4,7 +4,13 @@
 // fluid | body markers | walls: re-sorted at every compute() by a counting sort, so each group
 // is one contiguous range (fluid loops run over [0, nf) only, evenly split between threads),
 // the particles of one group in one cell are contiguous and memory access is local):
-//   x, v, a (Vec3 buffers), rho, p, drho, m (double), type (uint8), gid (uint64).
+//   x, v, a (Vec3 buffers), rho, p, drho, m (double), type (uint8), gid (uint64), key (uint64:
+//   the particle's place in this order, (group, cell) << 26 | place in the cell, carried to
+//   the next sort of a distributed run: fluid_exchange.hpp), slot (int64: the index in the
+//   layout of the last redistribution; slot >= n_own: a ghost).
+// On several ranks (a FluidExchange) the particles are the rank's owned ones and ghosts within
+// one kernel support; every loop skips ghosts, whose values come from their owners: x, v, rho,
+// m at each compute(), rho, p, m again after the density and after the wall pressure pass.
 // Wall particles are fixed; markers move with the bodies (sph/solid_coupling.hpp); the p and rho
 // of both come from the fluid by Adami extrapolation.
 //
@@ -17,6 +23,8 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <numeric>
+#include <type_traits>
 
 #include "core/error.hpp"
 #include "core/error_flag.hpp"
@@ -24,6 +32,7 @@
 #include "neighbor/cell_grid.hpp"
 #include "physics/sph_boundary.hpp"
 #include "physics/sph_pair.hpp"
+#include "sph/fluid_exchange.hpp"
 #include "sph/fluid_stage.hpp"
 #include "sph/solid_coupling.hpp"
 
@@ -38,6 +47,9 @@ QDEMSPH_HD int sph_group(std::uint8_t type) {
 // Cells are half the kernel support wide: the 5 x 5 x 5 cells around a particle cover the
 // support sphere with 42 % fewer candidates than 3 x 3 x 3 cells of one support width.
 inline constexpr int kSphCellsPerSupport = 2;
+
+// Order keys (fluid_exchange.hpp): (group, cell) sort key << kSphKeyShift | place in the cell.
+inline constexpr int kSphKeyShift = 26;
 
 // Neighbour ranges over arrays sorted by (group, cell): the particles of group q in cell c are
 // [start[q nc + c], start[q nc + c + 1]), nc the number of cells. Calls f(j, zz) for every
@@ -77,46 +89,71 @@ class SphStage final : public FluidStage {
 
  public:
   // `solid`: the bodies' state when the setup has markers (else unused, may be null).
-  explicit SphStage(const FluidSetup& f, const SolidViews* solid = nullptr)
+  // `exchange`: a distributed run's (every rank passes the whole setup and starts from the
+  // contiguous share [n r / N, n (r + 1) / N) of it, which the first compute() moves to the
+  // owners); null on one rank.
+  explicit SphStage(const FluidSetup& f, const SolidViews* solid = nullptr,
+                    std::unique_ptr<FluidExchange> exchange = nullptr)
       : P_(f.params),
-        n_(f.size()),
-        nf_(f.n_fluid),
+        n_global_(f.size()),
+        nf_global_(f.n_fluid),
         nm_(f.n_marker),
-        wall_volume_(f.dx * f.dx * f.dx) {
-    x_.assign(f.x);
-    v_.assign(f.v);
-    a_.resize(n_);
-    rho_.assign(f.rho);
-    p_.assign(f.p);
-    drho_.resize(n_);
-    pr_.resize(n_);
-    m_.assign(f.m);
-    type_.assign(f.type);
-    gid_.assign(f.gid);
-    grid_ =
+        wall_volume_(f.dx * f.dx * f.dx),
+        ex_(std::move(exchange)) {
+    grid_all_ =
         CellGrid::cover(f.lo, f.hi, P_.kernel.support() / kSphCellsPerSupport, f.z0, f.period_z);
+    grid_ = grid_all_;
     start_.resize(kSphGroups * grid_.count() + 1);
+    if (ex_) {
+      if (nm_ > 0)
+        throw InputError(
+            "fluid.couple_bodies: the fluid's coupling to bodies is not distributed over MPI "
+            "ranks yet; run coupled fluid scenes on one rank (docs/parallel.md)");
+      if (f.period_z > 0)
+        throw InputError(
+            "fluid.periodic_z: a periodic fluid is not distributed over MPI ranks yet; run it "
+            "on one rank (docs/parallel.md)");
+    }
+    if (double(kSphGroups) * double(grid_all_.count()) >= std::ldexp(1.0, 64 - kSphKeyShift))
+      throw InputError(
+          "fluid: too many neighbour cells for the particle order keys (coarsen "
+          "fluid.spacing or shrink the fluid's box)");
+    const std::int64_t r = ex_ ? ex_->rank() : 0, nr = ex_ ? ex_->size() : 1;
+    const std::int64_t b = n_global_ * r / nr, e = n_global_ * (r + 1) / nr;
+    auto part = [&](const auto& v) {
+      return std::remove_cvref_t<decltype(v)>(v.begin() + b, v.begin() + e);
+    };
+    std::vector<std::uint64_t> key(f.gid.begin() + b, f.gid.begin() + e);  // the setup's order
+    set_owned(part(f.x), part(f.v), part(f.rho), part(f.m), part(f.type), part(f.gid), key);
     if (nm_ > 0) {
       if (!solid) throw InputError("the fluid has body markers but no body state to couple to");
       coupling_ = std::make_unique<SolidCoupling<Exec>>(f.markers, f.n_fluid + f.n_wall, *solid);
     }
-    sort();  // groups contiguous before the first compute places the markers
+    if (!ex_) sort();  // groups contiguous before the first compute places the markers
     compute();
   }
 
   void kick(double h) override {
     const auto a = a_.cview();
     const auto v = v_.view();
+    const auto slot = slot_.cview();
+    const std::int64_t nown = n_own_;
     for_each(
-        Exec{}, nf_, QDEMSPH_LAMBDA(std::int64_t i) { v.set(i, v[i] + h * a[i]); });
+        Exec{}, nf_, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (slot[i] < nown) v.set(i, v[i] + h * a[i]);
+        });
   }
 
   void drift(double h) override {
     const auto v = v_.cview();
     const auto x = x_.view();
+    const auto slot = slot_.cview();
+    const std::int64_t nown = n_own_;
     const CellGrid g = grid_;
     for_each(
-        Exec{}, nf_, QDEMSPH_LAMBDA(std::int64_t i) { x.set(i, g.wrap(x[i] + h * v[i])); });
+        Exec{}, nf_, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (slot[i] < nown) x.set(i, g.wrap(x[i] + h * v[i]));
+        });
     pending_dt_ += h;
   }
 
@@ -124,12 +161,15 @@ class SphStage final : public FluidStage {
     // The fluid step since the last compute: the density update's dt and the markers' H.
     const double ddt = pending_dt_;
     pending_dt_ = 0;
+    if (ex_) redistribute();
     if (coupling_) coupling_->place(x_.view(), v_.view(), gid_.cview(), nf_, nf_ + nm_, ddt);
     sort();
     const SphParams P = P_;
     const CellGrid g = grid_;
     const std::int64_t* start = start_.cview().p;
     const std::int64_t nf = nf_;
+    const auto slot = slot_.cview();
+    const std::int64_t nown = n_own_;
     const auto x = x_.cview(), v = v_.cview();
     const auto gid = gid_.cview();
     const auto m = m_.view();
@@ -141,6 +181,7 @@ class SphStage final : public FluidStage {
     // (a density lagging half a step behind the positions makes the acoustic modes grow).
     for_each(
         Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (slot[i] >= nown) return;
           const PairState si{x[i], v[i], rho[i], m[i], 0.0};
           double dr = 0;
           const double s2 = P.kernel.support2;
@@ -158,11 +199,13 @@ class SphStage final : public FluidStage {
     const auto pr = pr_.view();
     for_each(
         Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (slot[i] >= nown) return;
           const double r = rho[i] + ddt * drho[i];
           rho[i] = r > P.eos.rho_min ? r : P.eos.rho_min;
           p[i] = P.eos.pressure(rho[i]);
           pr[i] = p[i] / (rho[i] * rho[i]);
         });
+    if (ex_) refresh_ghosts();
     // Wall and marker pressure and density by extrapolation from the fluid (Adami, with gravity
     // only: solid_coupling.hpp says why a body's acceleration is left out). Mass rho V with the
     // particle's volume: dx^3 for walls, the body lattice cell for markers.
@@ -174,6 +217,7 @@ class SphStage final : public FluidStage {
       for_each(
           Exec{}, n_ - nf, QDEMSPH_LAMBDA(std::int64_t q) {
             const std::int64_t i = nf + q;
+            if (slot[i] >= nown) return;
             const Vec3 xi = x[i];
             AdamiSum s;
             sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, xi,
@@ -187,12 +231,14 @@ class SphStage final : public FluidStage {
             m[i] = rho[i] * (q < nm ? mvol[gid[i] - g0] : wall_volume);
           });
     }
+    if (ex_) refresh_ghosts();
     // Pair sums: acceleration of fluid particles.
     const auto a = a_.view();
     const bool wall_visc = P.wall_viscosity;
     for_each(
         Exec{}, nf,
         QDEMSPH_LAMBDA(std::int64_t i) {
+          if (slot[i] >= nown) return;
           const PairState si{x[i], v[i], rho[i], m[i], pr[i]};
           Vec3 f{};
           const double s2 = P.kernel.support2;
@@ -234,23 +280,40 @@ class SphStage final : public FluidStage {
   FluidStats stats() override {
     const auto v = v_.cview(), a = a_.cview();
     const auto m = m_.cview(), rho = rho_.cview();
+    const auto slot = slot_.cview();
+    const std::int64_t nown = n_own_;
     const double rho0 = P_.eos.rho0;
     const std::int64_t nf = nf_;
     FluidStats s;
     s.kinetic = reduce_sum(
-        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) { return 0.5 * m[i] * norm2(v[i]); });
+        Exec{}, nf,
+        QDEMSPH_LAMBDA(std::int64_t i) { return slot[i] < nown ? 0.5 * m[i] * norm2(v[i]) : 0.0; });
     for (int c = 0; c < 3; ++c) {
       const double* vc = c == 0 ? v.x : (c == 1 ? v.y : v.z);
       s.momentum[c] = reduce_sum(
-          Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) { return m[i] * vc[i]; });
+          Exec{}, nf,
+          QDEMSPH_LAMBDA(std::int64_t i) { return slot[i] < nown ? m[i] * vc[i] : 0.0; });
     }
     s.v_max = reduce_max(
-        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) { return norm(v[i]); }, 0.0);
+        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) { return slot[i] < nown ? norm(v[i]) : 0.0; },
+        0.0);
     s.a_max = reduce_max(
-        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) { return norm(a[i]); }, 0.0);
+        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) { return slot[i] < nown ? norm(a[i]) : 0.0; },
+        0.0);
     s.rho_dev = reduce_max(
-        Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) { return fabs(rho[i] / rho0 - 1.0); }, 0.0);
+        Exec{}, nf,
+        QDEMSPH_LAMBDA(std::int64_t i) { return slot[i] < nown ? fabs(rho[i] / rho0 - 1.0) : 0.0; },
+        0.0);
     if (coupling_) s.force_on_bodies = coupling_->total_force();
+    if (ex_) {
+      double sums[4] = {s.kinetic, s.momentum.x, s.momentum.y, s.momentum.z};
+      double maxs[3] = {s.v_max, s.a_max, s.rho_dev};
+      ex_->sum(sums);
+      ex_->max(maxs);
+      s.kinetic = sums[0];
+      s.momentum = Vec3{sums[1], sums[2], sums[3]};
+      s.v_max = maxs[0], s.a_max = maxs[1], s.rho_dev = maxs[2];
+    }
     return s;
   }
 
@@ -264,27 +327,28 @@ class SphStage final : public FluidStage {
     const auto x = x_.cview(), v = v_.cview();
     const auto rho = rho_.cview();
     const auto gid = gid_.cview();
-    const double r = reduce_max(
+    const auto slot = slot_.cview();
+    const std::int64_t nown = n_own_;
+    double r = reduce_max(
         Exec{}, n_,
         QDEMSPH_LAMBDA(std::int64_t i) {
           const double s = x.x[i] + x.y[i] + x.z[i] + v.x[i] + v.y[i] + v.z[i] + rho[i];
-          return is_finite(s) ? 0.0 : static_cast<double>(gid[i] + 1);
+          return slot[i] >= nown || is_finite(s) ? 0.0 : static_cast<double>(gid[i] + 1);
         },
         0.0);
+    if (ex_) ex_->max({&r, 1});
     return static_cast<std::int64_t>(r) - 1;
   }
 
+  // Distributed: rank 0 gets every particle in the one-rank order (other ranks: empty).
   FluidHost download() override {
-    FluidHost h;
-    h.x = x_.to_host();
-    h.v = v_.to_host();
-    h.rho = rho_.to_host();
-    h.p = p_.to_host();
-    h.type = type_.to_host();
-    h.gid = gid_.to_host();
-    return h;
+    FluidState s = save_state();
+    return {std::move(s.x), std::move(s.v),    std::move(s.rho),
+            std::move(s.p), std::move(s.type), std::move(s.gid)};
   }
 
+  // Distributed: the owned particles of every rank on rank 0, in the order of their keys: the
+  // one-rank order, so a checkpoint of N ranks is the one-rank file (other ranks: empty).
   FluidState save_state() override {
     FluidState s;
     s.x = x_.to_host();
@@ -295,34 +359,51 @@ class SphStage final : public FluidStage {
     s.m = m_.to_host();
     s.type = type_.to_host();
     s.gid = gid_.to_host();
-    return s;
+    if (!ex_) return s;
+    const auto slot = slot_.to_host();
+    const auto key = ex_->gather(owned(key_.to_host(), slot));
+    std::vector<std::size_t> ord(key.size());
+    std::iota(ord.begin(), ord.end(), std::size_t{0});
+    std::sort(ord.begin(), ord.end(), [&](auto a, auto b) { return key[a] < key[b]; });
+    auto all = [&](const auto& v) {
+      const auto g = ex_->gather(owned(v, slot));
+      std::remove_cvref_t<decltype(v)> o(g.size());
+      for (std::size_t k = 0; k < ord.size(); ++k) o[k] = g[ord[k]];
+      return o;
+    };
+    return {all(s.x), all(s.v), all(s.a), all(s.rho), all(s.p), all(s.m), all(s.type), all(s.gid)};
   }
 
+  // Distributed: every rank passes the whole state and keeps its contiguous share (the next
+  // compute() moves the particles to their owners).
   void load_state(const FluidState& s) override {
-    const auto n = static_cast<std::size_t>(n_);
+    const auto n = static_cast<std::size_t>(n_global_);
     if (s.x.size() != n || s.v.size() != n || s.a.size() != n || s.rho.size() != n ||
         s.p.size() != n || s.m.size() != n || s.type.size() != n || s.gid.size() != n)
       throw InputError("fluid state does not fit the scene (particle count)");
-    x_.assign(s.x);
-    v_.assign(s.v);
-    a_.assign(s.a);
-    rho_.assign(s.rho);
-    p_.assign(s.p);
-    m_.assign(s.m);
-    type_.assign(s.type);
-    gid_.assign(s.gid);
+    const std::int64_t r = ex_ ? ex_->rank() : 0, nr = ex_ ? ex_->size() : 1;
+    const std::int64_t b = n_global_ * r / nr, e = n_global_ * (r + 1) / nr;
+    auto part = [&](const auto& v) {
+      return std::remove_cvref_t<decltype(v)>(v.begin() + b, v.begin() + e);
+    };
+    std::vector<std::uint64_t> key(e - b);  // the state is in its order
+    std::iota(key.begin(), key.end(), std::uint64_t(b));
+    set_owned(part(s.x), part(s.v), part(s.rho), part(s.m), part(s.type), part(s.gid), key);
+    a_.assign(part(s.a));
+    p_.assign(part(s.p));
     pending_dt_ = 0;
   }
 
-  std::int64_t size() const override { return n_; }
-  std::int64_t n_fluid() const override { return nf_; }
+  std::int64_t size() const override { return n_global_; }
+  std::int64_t n_fluid() const override { return nf_global_; }
   std::int64_t n_marker() const override { return nm_; }
   const SphParams& params() const override { return P_; }
   std::size_t device_bytes() const override {
     return x_.bytes() + v_.bytes() + a_.bytes() + rho_.bytes() + p_.bytes() + drho_.bytes() +
-           pr_.bytes() + m_.bytes() + type_.bytes() + gid_.bytes() + tmp3_.bytes() + tmpd_.bytes() +
-           tmpu_.bytes() + tmpt_.bytes() + keys_.bytes() + start_.bytes() + order_.bytes() +
-           scratch_.bytes() + (coupling_ ? coupling_->bytes() : 0);
+           pr_.bytes() + m_.bytes() + type_.bytes() + gid_.bytes() + key_.bytes() + slot_.bytes() +
+           tmp3_.bytes() + tmpd_.bytes() + tmpu_.bytes() + tmpt_.bytes() + tmpi_.bytes() +
+           keys_.bytes() + start_.bytes() + order_.bytes() + scratch_.bytes() +
+           (coupling_ ? coupling_->bytes() : 0);
   }
 
   // Public only because nvcc's extended lambdas need an accessible enclosing function.
@@ -349,6 +430,22 @@ class SphStage final : public FluidStage {
     permute(m_, tmpd_, ord);
     permute(type_, tmpt_, ord);
     permute(gid_, tmpu_, ord);
+    permute(slot_, tmpi_, ord);
+    // The order key of each particle: its bucket (in the whole box's grid) and its place in it.
+    const auto key = key_.view();
+    const auto kc = keys_.cview();
+    const std::int64_t* start = start_.cview().p;
+    const std::int64_t nca = grid_all_.count();
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
+          const std::int64_t b = kc[ord[i]];
+          const std::int64_t q = b / nc, c = b - q * nc;
+          const std::int64_t cx = c % g.n[0] + g.first[0], cy = c / g.n[0] % g.n[1] + g.first[1],
+                             cz = c / (std::int64_t(g.n[0]) * g.n[1]) + g.first[2];
+          const std::int64_t ba = q * nca + (cz * g.full[1] + cy) * g.full[0] + cx;
+          key[i] = (static_cast<std::uint64_t>(ba) << kSphKeyShift) |
+                   static_cast<std::uint64_t>(i - start[b]);
+        });
   }
   template <class T>
   void permute(Buffer<T>& b, Buffer<T>& tmp, View<const std::int64_t> ord) {
@@ -368,19 +465,121 @@ class SphStage final : public FluidStage {
     std::swap(b, tmp3_);
   }
 
+  // Distributed: the owned particles to the exchange, which migrates them and adds the
+  // ghosts; the result laid out in the order of the keys (the one-rank order restricted to
+  // this rank's particles), slot = its place in the exchange's layout.
+  void redistribute() {
+    const auto slot = slot_.to_host();
+    FluidParticles q{owned(x_.to_host(), slot),    owned(v_.to_host(), slot),
+                     owned(rho_.to_host(), slot),  owned(m_.to_host(), slot),
+                     owned(type_.to_host(), slot), owned(gid_.to_host(), slot),
+                     owned(key_.to_host(), slot)};
+    const std::int64_t nown = ex_->distribute(q);
+    std::vector<std::int64_t> ord(q.size());
+    std::iota(ord.begin(), ord.end(), std::int64_t{0});
+    std::sort(ord.begin(), ord.end(), [&](auto a, auto b) { return q.key[a] < q.key[b]; });
+    auto in_order = [&](const auto& v) {
+      std::remove_cvref_t<decltype(v)> o(v.size());
+      for (std::size_t k = 0; k < ord.size(); ++k) o[k] = v[ord[k]];
+      return o;
+    };
+    set_owned(in_order(q.x), in_order(q.v), in_order(q.rho), in_order(q.m), in_order(q.type),
+              in_order(q.gid), in_order(q.key));
+    slot_.assign(ord);
+    n_own_ = nown;
+    // The neighbour grid: the window of the whole box's cells that holds this rank's particles.
+    int lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = grid_all_.n[a] - 1;
+      for (const Vec3& p : q.x) {
+        const int c = grid_all_.coord(p[a], a);
+        lo[a] = std::min(lo[a], c), hi[a] = std::max(hi[a], c);
+      }
+      if (q.x.empty()) lo[a] = 0;  // no particle: one cell
+      hi[a] = std::max(hi[a], lo[a]);
+    }
+    grid_ = grid_all_.window(lo, hi);
+    start_.resize(kSphGroups * grid_.count() + 1);
+  }
+
+  // Distributed: rho, p, m of the ghosts from their owners; their p / rho^2 as the owners have it.
+  void refresh_ghosts() {
+    const auto slot = slot_.to_host();
+    std::vector<double> h[3] = {rho_.to_host(), p_.to_host(), m_.to_host()};
+    std::vector<double> s[3];
+    for (int f = 0; f < 3; ++f) {
+      s[f].resize(h[f].size());
+      for (std::size_t i = 0; i < slot.size(); ++i) s[f][slot[i]] = h[f][i];
+    }
+    const std::span<double> fields[3] = {s[0], s[1], s[2]};
+    ex_->refresh(fields);
+    for (int f = 0; f < 3; ++f)
+      for (std::size_t i = 0; i < slot.size(); ++i)
+        if (slot[i] >= n_own_) h[f][i] = s[f][slot[i]];
+    rho_.assign(h[0]);
+    p_.assign(h[1]);
+    m_.assign(h[2]);
+    const auto rho = rho_.cview(), p = p_.cview();
+    const auto pr = pr_.view();
+    const auto sl = slot_.cview();
+    const std::int64_t nown = n_own_;
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (sl[i] >= nown) pr[i] = p[i] / (rho[i] * rho[i]);
+        });
+  }
+
  private:
+  // The entries of the owned particles (slot < n_own_) of a host copy of a local array.
+  template <class T>
+  std::vector<T> owned(const std::vector<T>& v, const std::vector<std::int64_t>& slot) const {
+    std::vector<T> o;
+    o.reserve(static_cast<std::size_t>(n_own_));
+    for (std::size_t i = 0; i < v.size(); ++i)
+      if (slot[i] < n_own_) o.push_back(v[i]);
+    return o;
+  }
+
+  // The rank's particles (all owned, slot = index); the per-step arrays sized to them.
+  void set_owned(const std::vector<Vec3>& x, const std::vector<Vec3>& v,
+                 const std::vector<double>& rho, const std::vector<double>& m,
+                 const std::vector<std::uint8_t>& type, const std::vector<std::uint64_t>& gid,
+                 const std::vector<std::uint64_t>& key) {
+    n_ = n_own_ = static_cast<std::int64_t>(x.size());
+    nf_ = std::count(type.begin(), type.end(), std::uint8_t{kSphFluid});
+    x_.assign(x);
+    v_.assign(v);
+    rho_.assign(rho);
+    m_.assign(m);
+    type_.assign(type);
+    gid_.assign(gid);
+    key_.assign(key);
+    std::vector<std::int64_t> slot(x.size());
+    std::iota(slot.begin(), slot.end(), std::int64_t{0});
+    slot_.assign(slot);
+    a_.resize(n_);
+    p_.resize(n_);
+    drho_.resize(n_);
+    pr_.resize(n_);
+  }
+
   SphParams P_;
-  std::int64_t n_ = 0, nf_ = 0, nm_ = 0;
+  std::int64_t n_global_ = 0, nf_global_ = 0;  // particles and fluid particles of all ranks
+  std::int64_t n_ = 0, nf_ = 0, nm_ = 0;       // this rank's, ghosts included
+  std::int64_t n_own_ = 0;                     // this rank's owned particles
   double pending_dt_ = 0;   // time drifted since the last compute(): the density update's dt
   double wall_volume_ = 0;  // dx^3
   Vec3Buffer x_{S}, v_{S}, a_{S}, tmp3_{S};
   Buffer<double> rho_{S}, p_{S}, drho_{S}, m_{S}, tmpd_{S};
   Buffer<double> pr_{S};  // p / rho^2 of this step (set after the sort, not carried over)
   Buffer<std::uint8_t> type_{S}, tmpt_{S};
-  Buffer<std::uint64_t> gid_{S}, tmpu_{S};
-  CellGrid grid_;
+  Buffer<std::uint64_t> gid_{S}, key_{S}, tmpu_{S};
+  Buffer<std::int64_t> slot_{S}, tmpi_{S};
+  CellGrid grid_all_;  // the whole fluid box
+  CellGrid grid_;      // the cells searched: the whole box, or a rank's window of it
   Buffer<std::int64_t> keys_{S}, start_{S}, order_{S}, scratch_{S};
   std::unique_ptr<SolidCoupling<Exec>> coupling_;  // null without bodies
+  std::unique_ptr<FluidExchange> ex_;              // null on one rank
 };
 
 }  // namespace qdemsph

@@ -162,3 +162,73 @@ def test_checkpoint_restarts_on_other_rank_counts(qdemsph, checks, case_out):
     checks.check("changed_scene.messages", proc.stderr.count("does not match scene") if named else 0, kind="abs",
                  reference=1, tolerance=0, unit="-", note="reported once (by rank 0), naming material 'm' and E")
     checks.require()
+
+
+def fluid_checkpoint(path):
+    """The /fluid datasets of a checkpoint file."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        return {k: np.asarray(f["fluid"][k]) for k in f["fluid"] if isinstance(f["fluid"][k], h5py.Dataset)}
+
+
+# fluid.csv columns that are sums over particles (reduced over ranks: round-off) and those
+# that are maxima or positions (exact).
+FLUID_SUMS = ("kinetic", "px", "py", "pz")
+
+
+def test_fluid_same_as_one_rank(qdemsph, checks, case_out):
+    """SPH on 2 ranks (the partition cut again every 25 steps): every fluid.h5 frame (positions,
+    velocities, pressures, densities, ids, types, in the file's order) identical to one process,
+    fluid.csv's maxima and positions identical and its sums (kinetic energy, momentum) to
+    round-off; the 2-rank checkpoint of step 50 holds the one-rank fluid state bit for bit, and
+    2 ranks restarted from the one-rank checkpoint continue exactly as the one-rank run."""
+    from harness.sph import fluid_csv, fluid_frames
+
+    if not mpi_available(qdemsph):
+        pytest.skip("qdemsph built without MPI, or no mpirun")
+    scene = HERE / "scene_fluid.yaml"
+    every = "output.checkpoint={every_steps: 50, keep: 5}"
+    one = must(qdemsph.run, scene, case_out / "fluid_np1", sets=[every])
+    two = must(qdemsph.run, scene, case_out / "fluid_np2", sets=REBALANCE + [every], ranks=2)
+    checks.check("fluid.np2.completed", 1.0 if two.status == "completed" else 0.0, kind="min", tolerance=1.0,
+                 unit="bool")
+
+    def frames_diff(a_out, b_out):
+        fa, fb = fluid_frames(a_out), fluid_frames(b_out)
+        if len(fa) != len(fb):
+            return np.inf, len(fb)
+        d = 0.0
+        for a, b in zip(fa, fb):
+            for k in ("x", "v", "p", "rho", "type", "id"):
+                d = max(d, float(np.max(np.abs(a[k].astype(float) - b[k].astype(float)))))
+        return d, len(fb)
+
+    d, n = frames_diff(one.out, two.out)
+    checks.check("fluid.np2.frames", n, kind="abs", reference=len(fluid_frames(one.out)), tolerance=0)
+    checks.check("fluid.np2.fluid_h5_max_diff", d, kind="max", tolerance=0.0,
+                 note="positions, velocities, pressures, densities, ids and types of every frame, in file order")
+    c1, c2 = fluid_csv(one.out), fluid_csv(two.out)
+    exact = max(float(np.max(np.abs(c1[k] - c2[k]))) for k in c1 if k not in FLUID_SUMS)
+    checks.check("fluid.np2.csv_exact_columns_max_diff", exact, kind="max", tolerance=0.0,
+                 note="time, v_max, rho_dev, x_max, y_max, dt_limit, body force")
+    scale = float(np.max(np.abs(c1["kinetic"]))) + 1e-300
+    sums = max(float(np.max(np.abs(c1[k] - c2[k]))) for k in FLUID_SUMS) / scale
+    checks.check("fluid.np2.csv_sums_rel_diff", sums, kind="max", tolerance=1e-12,
+                 note="kinetic energy and momentum: sums over ranks (round-off), relative to the largest kinetic")
+
+    name = "checkpoint_0000000050.h5"
+    a, b = fluid_checkpoint(one.out / "checkpoints" / name), fluid_checkpoint(two.out / "checkpoints" / name)
+    differing = sorted(k for k in a.keys() | b.keys() if k not in a or k not in b or not np.array_equal(a[k], b[k]))
+    checks.check("fluid.checkpoint.datasets_differing", len(differing), kind="max", tolerance=0, unit="datasets",
+                 note=f"the 2-rank and the one-rank checkpoint of step 50: {sorted(a)}; differing: {differing}")
+
+    out = case_out / "fluid_restart_np2"
+    shutil.rmtree(out, ignore_errors=True)
+    shutil.copytree(one.out, out)
+    run = must(qdemsph.run, scene, out, sets=REBALANCE + [every], ranks=2, restart=out / "checkpoints" / name)
+    d, n = frames_diff(one.out, run.out)
+    checks.check("fluid.restart_np2.fluid_h5_max_diff", d, kind="max", tolerance=0.0,
+                 note="a one-rank checkpoint of step 50 continued on 2 ranks: every frame as the uninterrupted run")
+    checks.info("fluid.np2.wall", two.solver_wall_s, unit="s", wall_s=two.solver_wall_s)
+    checks.require()

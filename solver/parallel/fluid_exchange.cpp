@@ -1,0 +1,209 @@
+#include "parallel/fluid_exchange.hpp"
+
+#include <algorithm>
+#include <unordered_map>
+#include <utility>
+
+#include "parallel/balance.hpp"
+#include "parallel/band_cells.hpp"
+#include "parallel/collectives.hpp"
+#include "parallel/comm_plan.hpp"
+#include "sph/fluid_setup.hpp"
+
+namespace qdemsph {
+namespace {
+
+std::vector<CommField> fields_of(FluidParticles& p) {
+  return {comm_field(p.x),    comm_field(p.v),   comm_field(p.rho), comm_field(p.m),
+          comm_field(p.type), comm_field(p.gid), comm_field(p.key)};
+}
+
+void resize(FluidParticles& p, std::int64_t n) {
+  const auto k = static_cast<std::size_t>(n);
+  p.x.resize(k), p.v.resize(k), p.rho.resize(k), p.m.resize(k);
+  p.type.resize(k), p.gid.resize(k), p.key.resize(k);
+}
+
+class MpiFluidExchange final : public FluidExchange {
+ public:
+  MpiFluidExchange(MPI_Comm comm, const ParallelOptions& o, double support)
+      : curve_(parse_curve(o.curve)),
+        every_(o.rebalance_every),
+        threshold_(o.rebalance_threshold),
+        max_cell_(o.max_cell_cost),
+        band_(support / 2) {
+    MPI_Comm_dup(comm, &comm_);
+    MPI_Comm_rank(comm_, &me_);
+    MPI_Comm_size(comm_, &np_);
+  }
+  ~MpiFluidExchange() override {
+    halo_.reset();
+    int finalized = 0;
+    MPI_Finalized(&finalized);
+    if (!finalized) MPI_Comm_free(&comm_);
+  }
+
+  std::int64_t distribute(FluidParticles& p) override {
+    const std::int64_t n = static_cast<std::int64_t>(p.size());
+    std::vector<double> cost(n);
+    for (std::int64_t i = 0; i < n; ++i) cost[i] = p.type[i] == kSphFluid ? 1.0 : kFluidWallCost;
+    if (dec_.splitters.empty() || rebalance_due(cost))
+      dec_ = balance(comm_, p.x, cost, curve_, max_cell_);
+    ++calls_;
+
+    // Owned particles to the owners of their positions.
+    std::vector<int> dest(n);
+    for (std::int64_t i = 0; i < n; ++i) dest[i] = dec_.owner(p.x[i]);
+    MigratePlan mp(comm_, dest, p.gid);
+    FluidParticles o;
+    resize(o, mp.n_new());
+    mp.begin(fields_of(p));
+    mp.finish(fields_of(o));
+    const std::int64_t nown = mp.n_new();
+
+    // Ghosts: the band cells of this rank's owned particles, published to all; a particle
+    // goes to every other rank with an owned particle in the 5^3 cells around its own. A cell
+    // whose 5^3 cells lie inside this rank's piece has no other rank's particle around it, so
+    // only the others (near the piece's border) are published.
+    std::vector<std::uint64_t> mine(nown);
+    for (std::int64_t i = 0; i < nown; ++i) mine[i] = cell_key(o.x[i]);
+    std::sort(mine.begin(), mine.end());
+    mine.erase(std::unique(mine.begin(), mine.end()), mine.end());
+    std::vector<std::pair<std::uint64_t, std::int64_t>> pub;
+    for (auto c : mine)
+      if (!interior(c)) pub.push_back({c, me_});
+    std::unordered_map<std::uint64_t, std::vector<int>> occupied;  // cell -> other ranks
+    for (const auto& [c, r] : allgatherv(comm_, pub))
+      if (r != me_) occupied[c].push_back(static_cast<int>(r));
+    std::unordered_map<std::uint64_t, std::vector<int>> near;  // cell -> ranks within the band
+    std::vector<std::int64_t> off{0};
+    std::vector<int> ranks;
+    for (std::int64_t i = 0; i < nown; ++i) {
+      const BandCell c = band_cell(o.x[i], band_);
+      const std::uint64_t key = band_key(c.i[0], c.i[1], c.i[2]);
+      auto it = near.find(key);
+      if (it == near.end()) {
+        std::vector<int> r;
+        for_each_band_neighbour(c, [&](std::uint64_t k) {
+          const auto q = occupied.find(k);
+          if (q != occupied.end()) r.insert(r.end(), q->second.begin(), q->second.end());
+        });
+        std::sort(r.begin(), r.end());
+        r.erase(std::unique(r.begin(), r.end()), r.end());
+        it = near.emplace(key, std::move(r)).first;
+      }
+      ranks.insert(ranks.end(), it->second.begin(), it->second.end());
+      off.push_back(static_cast<std::int64_t>(ranks.size()));
+    }
+    halo_.reset();
+    halo_ = std::make_unique<HaloPlan>(comm_, nown, off, ranks, o.gid);
+    resize(o, halo_->n_total());
+    const auto f = fields_of(o);
+    halo_->gather_begin(f);
+    halo_->gather_finish(f);
+    p = std::move(o);
+    return nown;
+  }
+
+  void refresh(std::span<const std::span<double>> fields) override {
+    std::vector<CommField> f;
+    for (auto s : fields) f.push_back(comm_field(s.data(), static_cast<std::int64_t>(s.size())));
+    halo_->gather_begin(f);
+    halo_->gather_finish(f);
+  }
+
+  void sum(std::span<double> v) override {
+    allreduce_sum_same(comm_, v.data(), static_cast<int>(v.size()));
+  }
+  void max(std::span<double> v) override {
+    MPI_Allreduce(MPI_IN_PLACE, v.data(), static_cast<int>(v.size()), MPI_DOUBLE, MPI_MAX, comm_);
+  }
+  std::vector<Vec3> gather(const std::vector<Vec3>& v) override { return gatherv(comm_, v); }
+  std::vector<double> gather(const std::vector<double>& v) override { return gatherv(comm_, v); }
+  std::vector<std::uint8_t> gather(const std::vector<std::uint8_t>& v) override {
+    return gatherv(comm_, v);
+  }
+  std::vector<std::uint64_t> gather(const std::vector<std::uint64_t>& v) override {
+    return gatherv(comm_, v);
+  }
+  int rank() const override { return me_; }
+  int size() const override { return np_; }
+
+ private:
+  std::uint64_t cell_key(Vec3 p) const {
+    const BandCell c = band_cell(p, band_);
+    return band_key(c.i[0], c.i[1], c.i[2]);
+  }
+
+  // True when every point of the 5^3 band cells around cell `key` belongs to this rank: the
+  // box lies in at most 2 x 2 x 2 cells of some tree level, and each of their curve segments
+  // (keys are hierarchical, sfc.hpp) lies in this rank's piece. Conservative: false may be
+  // answered for an interior cell (it is then published needlessly), never true for another.
+  bool interior(std::uint64_t key) const {
+    const SfcGrid& g = dec_.grid;
+    const std::uint64_t first = dec_.splitters[me_], last = dec_.splitters[me_ + 1];
+    if (first >= last) return false;
+    constexpr std::int64_t off = std::int64_t{1} << 20;
+    const std::int64_t c[3] = {static_cast<std::int64_t>(key >> 42) - off,
+                               static_cast<std::int64_t>((key >> 21) & 0x1fffff) - off,
+                               static_cast<std::int64_t>(key & 0x1fffff) - off};
+    // The box's finest cells, one more on each side against round-off in band_cell's floor.
+    std::uint32_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = g.coord(double(c[a] - 2) * band_, g.lo[a]);
+      hi[a] = g.coord(double(c[a] + 3) * band_, g.lo[a]);
+      lo[a] -= lo[a] > 0;
+      hi[a] += hi[a] + 1 < g.side();
+    }
+    const std::uint32_t base = curve_base(g.curve);
+    std::uint32_t s = 1;  // finest cells per side of a cell of the level
+    std::uint64_t span = 1;
+    auto fits = [&] {
+      for (int a = 0; a < 3; ++a)
+        if (hi[a] / s - lo[a] / s > 1) return false;
+      return true;
+    };
+    for (int l = g.order; l > 0 && !fits(); --l)
+      s *= base, span *= std::uint64_t(base) * base * base;
+    if (!fits()) return false;
+    for (std::uint32_t x = lo[0] / s; x <= hi[0] / s; ++x)
+      for (std::uint32_t y = lo[1] / s; y <= hi[1] / s; ++y)
+        for (std::uint32_t z = lo[2] / s; z <= hi[2] / s; ++z) {
+          const std::uint64_t k = sfc_key(g.curve, x * s, y * s, z * s, g.order);
+          const std::uint64_t seg = k - k % span;
+          if (seg < first || seg + span > last) return false;
+        }
+    return true;
+  }
+
+  // Every rebalance_every calls: the owned cost's max / mean - 1 over the ranks against the
+  // threshold (the same decision on every rank).
+  bool rebalance_due(const std::vector<double>& cost) {
+    if (every_ <= 0 || calls_ == 0 || calls_ % every_ != 0) return false;
+    double load = 0;
+    for (double c : cost) load += c;
+    double total = load, most = load;
+    allreduce_sum_same(comm_, &total, 1);
+    MPI_Allreduce(MPI_IN_PLACE, &most, 1, MPI_DOUBLE, MPI_MAX, comm_);
+    const double mean = total / np_;
+    return mean > 0 && most / mean - 1 > threshold_;
+  }
+
+  MPI_Comm comm_ = MPI_COMM_NULL;
+  int me_ = 0, np_ = 1;
+  Curve curve_;
+  long every_ = 0;
+  double threshold_ = 0, max_cell_ = 0;
+  double band_ = 1;  // band cell width: half the kernel support
+  long calls_ = 0;
+  Decomposition dec_;
+  std::unique_ptr<HaloPlan> halo_;
+};
+
+}  // namespace
+
+std::unique_ptr<FluidExchange> make_fluid_exchange(const ParallelOptions& options, double support) {
+  return std::make_unique<MpiFluidExchange>(MPI_COMM_WORLD, options, support);
+}
+
+}  // namespace qdemsph

@@ -1,0 +1,202 @@
+// The SPH fluid on 1, 2 and 4 ranks against one rank (docs/parallel.md, "Fluid"): a small 3D
+// dam break in a tank (fluid and wall particles), the same SphStage with a FluidExchange and
+// without one, stepped with the fluid's velocity Verlet (fluid_stage.hpp):
+//  - positions, velocities, densities and pressures equal one rank bit for bit at every step
+//    checked, with the partition cut again every 10 steps (threshold 0), on each curve;
+//  - after every step every particle id is present exactly once over the ranks (the gather
+//    to rank 0 concatenates every rank's owned particles);
+//  - the gathered state is the one-rank state in the one-rank order (a checkpoint of N ranks
+//    is the one-rank file); restarting N ranks from a one-rank state continues exactly;
+//  - a fluid coupled to bodies is refused with an input error (not distributed yet).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <numeric>
+#include <string>
+
+#include "core/error.hpp"
+#include "distributed_fixture.hpp"
+#include "parallel/fluid_exchange.hpp"
+#include "sph/fluid_setup.hpp"
+#include "sph/fluid_stage.hpp"
+
+using namespace qdemsph;
+using namespace qdemsph::mpi_testing;
+
+namespace {
+
+// A water column released in a 3D tank (2 wall layers), about 1,900 particles.
+const char* kDamScene = R"(
+run: {end_time: 0.1, dt: 2.0e-4}
+gravity: [0, 0, -9.81]
+fluid:
+  spacing: 0.02
+  blocks: [{min: [0, 0, 0], max: [0.2, 0.12, 0.2]}]
+  tanks: [{min: [0, 0, 0], max: [0.5, 0.12, 0.3], thickness_layers: 2}]
+)";
+
+constexpr double kH = 2.0e-4;  // the fluid step (below the scene's CFL limit, 2.6e-4 s)
+
+FluidSetup dam_setup() {
+  const Scene s = parse_scene(kDamScene, "dam.yaml");
+  return build_fluid(s.fluid, s.gravity);
+}
+
+std::unique_ptr<FluidStage> distributed_stage(const FluidSetup& f,
+                                              const std::string& curve = "hilbert") {
+  return make_fluid_stage("cpu", f, nullptr,
+                          make_fluid_exchange(options(10, 0.0, curve), f.params.kernel.support()));
+}
+
+void step(FluidStage& s) {
+  s.kick(0.5 * kH);
+  s.drift(kH);
+  s.compute();
+  s.kick(0.5 * kH);
+}
+
+struct StateDiff {
+  double x = 0, v = 0, a = 0, rho = 0, p = 0, m = 0;
+  bool same_order = true;  // gid and type in the same order
+  double max() const { return std::max({x, v, a, rho, p, m}); }
+};
+
+StateDiff diff(const FluidState& a, const FluidState& b) {
+  StateDiff d;
+  if (a.gid != b.gid || a.type != b.type) {
+    d.same_order = false;
+    return d;
+  }
+  for (std::size_t i = 0; i < a.gid.size(); ++i) {
+    d.x = std::max(d.x, norm(a.x[i] - b.x[i]));
+    d.v = std::max(d.v, norm(a.v[i] - b.v[i]));
+    d.a = std::max(d.a, norm(a.a[i] - b.a[i]));
+    d.rho = std::max(d.rho, std::abs(a.rho[i] - b.rho[i]));
+    d.p = std::max(d.p, std::abs(a.p[i] - b.p[i]));
+    d.m = std::max(d.m, std::abs(a.m[i] - b.m[i]));
+  }
+  return d;
+}
+
+// Every particle id once among the gathered particles (rank 0).
+bool each_id_once(const FluidState& s, std::int64_t n) {
+  std::vector<std::uint64_t> g = s.gid;
+  std::sort(g.begin(), g.end());
+  std::vector<std::uint64_t> want(static_cast<std::size_t>(n));
+  std::iota(want.begin(), want.end(), std::uint64_t{0});
+  return g == want;
+}
+
+}  // namespace
+
+TEST(DistributedFluid, DamBreakEqualsOneRankBitForBit) {
+  const FluidSetup f = dam_setup();
+  const bool root = rank_of() == 0;
+  std::unique_ptr<FluidStage> ref = root ? make_fluid_stage("cpu", f) : nullptr;
+  auto dist = distributed_stage(f);
+  EXPECT_EQ(dist->size(), f.size());
+  EXPECT_EQ(dist->n_fluid(), f.n_fluid);
+  StateDiff worst;
+  double kinetic = 0, vmax = 0;
+  int bad_ids = 0, checks = 0;
+  constexpr int kSteps = 300;
+  for (int n = 0; n <= kSteps; ++n) {
+    if (n > 0) {
+      if (ref) step(*ref);
+      step(*dist);
+    }
+    const FluidState b = dist->save_state();
+    const FluidStats sb = dist->stats();
+    if (!root) continue;
+    bad_ids += !each_id_once(b, f.size());
+    const FluidState a = ref->save_state();
+    const StateDiff d = diff(a, b);
+    EXPECT_TRUE(d.same_order) << "step " << n;
+    worst.x = std::max(worst.x, d.x), worst.v = std::max(worst.v, d.v);
+    worst.a = std::max(worst.a, d.a), worst.rho = std::max(worst.rho, d.rho);
+    worst.p = std::max(worst.p, d.p), worst.m = std::max(worst.m, d.m);
+    const FluidStats sa = ref->stats();
+    kinetic = std::max(kinetic, std::abs(sa.kinetic - sb.kinetic) / sa.kinetic);
+    vmax = std::max(vmax, std::abs(sa.v_max - sb.v_max));
+    ++checks;
+  }
+  if (root) {
+    std::printf(
+        "[fluid dam break, %d ranks, %ld particles, %d steps] max |dx| = %.3e m, |dv| = %.3e "
+        "m/s, |drho| = %.3e, |dp| = %.3e Pa, kinetic %.3e (relative)\n",
+        size_of(), static_cast<long>(f.size()), kSteps, worst.x, worst.v, worst.rho, worst.p,
+        kinetic);
+    EXPECT_EQ(checks, kSteps + 1);
+    EXPECT_EQ(bad_ids, 0) << "a particle id missing or present twice after a migration";
+    EXPECT_EQ(worst.max(), 0.0);
+    EXPECT_EQ(vmax, 0.0);
+    EXPECT_LT(kinetic, 1e-13);
+    // The fluid moved: the front ran past the column.
+    const FluidHost h = ref->download();
+    double front = 0;
+    for (std::size_t i = 0; i < h.x.size(); ++i)
+      if (h.type[i] == kSphFluid) front = std::max(front, h.x[i].x);
+    EXPECT_GT(front, 0.21);
+  }
+}
+
+TEST(DistributedFluid, MortonAndPeanoPartitionsEqualOneRank) {
+  const FluidSetup f = dam_setup();
+  for (const char* curve : {"morton", "peano"}) {
+    SCOPED_TRACE(curve);
+    auto ref = rank_of() == 0 ? make_fluid_stage("cpu", f) : nullptr;
+    auto dist = distributed_stage(f, curve);
+    for (int n = 0; n < 100; ++n) {
+      if (ref) step(*ref);
+      step(*dist);
+    }
+    const FluidState b = dist->save_state();
+    if (ref) {
+      EXPECT_TRUE(each_id_once(b, f.size()));
+      const StateDiff d = diff(ref->save_state(), b);
+      EXPECT_TRUE(d.same_order);
+      EXPECT_EQ(d.max(), 0.0);
+    }
+  }
+}
+
+TEST(DistributedFluid, RestartFromOneRankStateContinuesExactly) {
+  const FluidSetup f = dam_setup();
+  // The reference on every rank (its state is what a checkpoint read by every rank gives).
+  auto ref = make_fluid_stage("cpu", f);
+  for (int n = 0; n < 60; ++n) step(*ref);
+  auto dist = distributed_stage(f);
+  dist->load_state(ref->save_state());
+  for (int n = 0; n < 60; ++n) {
+    step(*ref);
+    step(*dist);
+  }
+  const FluidState b = dist->save_state();
+  if (rank_of() == 0) {
+    const StateDiff d = diff(ref->save_state(), b);
+    EXPECT_TRUE(d.same_order);
+    EXPECT_EQ(d.max(), 0.0);
+  }
+}
+
+TEST(DistributedFluid, CoupledBodiesAreRefused) {
+  const Scene s = parse_scene(R"(
+run: {end_time: 0.01}
+gravity: [0, 0, -9.81]
+materials: {m: {E: 1.0e6, nu: 0.3, density: 500}}
+bodies:
+  - {name: box, material: m, mesh: {type: box, origin: [0.1, 0.02, 0.1], size: [0.08, 0.08, 0.08], cells: [2, 2, 2]}}
+fluid:
+  spacing: 0.02
+  couple_bodies: true
+  blocks: [{min: [0, 0, 0], max: [0.3, 0.12, 0.1]}]
+  tanks: [{min: [0, 0, 0], max: [0.3, 0.12, 0.3], thickness_layers: 2}]
+)",
+                              "coupled.yaml");
+  const Model m = build_model(s);
+  FluidSetup f = build_fluid(s.fluid, s.gravity);
+  add_solid_markers(f, m);
+  ASSERT_GT(f.n_marker, 0);
+  EXPECT_THROW(distributed_stage(f), InputError);
+}
