@@ -3,7 +3,7 @@ canonical case of the chain's sliding contacts between leaning pieces (issue 5).
 
 Geometry: common.SHOGI_DEFAULT size (king), boxwood 950 kg/m^3. The piece stands on its
 front bottom edge (x = T/2, z = 0), tilted by --tilt0 toward +x; a fixed box block (the
-"wall", 20 mm thick, 2 w wide, --block-top high) has its face x = x_w at the piece's
+"wall", 20 mm thick, 2 w wide, 50 mm high) has its face x = x_w at the piece's
 farthest point, the front end of its apex ridge, which therefore touches the face (a vertex
 sliding on a face: the leaning piece's apex on the next piece's back face in the chain). The
 floor is the usual fixed slab. Released at rest, the piece slides down: its foot slides on
@@ -35,7 +35,6 @@ from yade import O  # noqa: E402
 p = ys.add_common_args(argparse.ArgumentParser(description=__doc__), dt=1e-5, young=1e8, mu=0.5)
 ss.add_piece_args(p, pitch=0.0, pitch_help="unused (one piece)", tilt0=76.0, omega0=0.0,
                   tend=0.12, max_rows=2000)
-p.add_argument("--block-top", type=float, default=0.05, help="height of the block's top face, m")
 args = ys.parse(p, sys.argv)
 
 h, w, t = common.SHOGI_SIZES[args.size]
@@ -44,20 +43,18 @@ verts = common.shogi_tilt_frame(args.tilt0, (0.0, 0.0, 0.0), args.size)
 apex = max(verts, key=lambda v: v[0])
 x_w = apex[0]
 ss.add_floor(mat, -2 * h, x_w + 2 * h, -w, w)
-block = ys.add_polyhedron(mat, [(x, y, z) for x in (x_w, x_w + 0.02) for y in (-w, w)
-                                for z in (0.0, args.block_top)], fixed=True)
+BLOCK_TOP = 0.05  # m, well above the apex
+ys.add_polyhedron(mat, [(x, y, z) for x in (x_w, x_w + 0.02) for y in (-w, w) for z in (0.0, BLOCK_TOP)],
+                  fixed=True)
 axis = ss.add_piece(mat, 0.0, 0.0, args.tilt0, args.size)
 rec = ss.Recorder([axis], period=max(1, int(round(1e-4 / args.dt))))
-
-
 ys.setup_engines(args.dt, [rec.runner])
 rec.sample()
 wall0 = time.time()
 ys.run_steps(args.tend / args.dt)
 wall_s = time.time() - wall0
 
-
-results = {k: v for k, v in ss.tilt_events(rec, 0, levels=(80.0, 85.0)).items()}
+results = ss.tilt_events(rec, 0, levels=(80.0, 85.0))
 results["final_tilt_deg"] = rec.final_tilts()[0]
 results["steps"] = O.iter
 params = {"mu": args.mu, "dt": args.dt, "young": args.young, "poisson": args.poisson,
@@ -65,7 +62,7 @@ params = {"mu": args.mu, "dt": args.dt, "young": args.young, "poisson": args.poi
           "size": args.size, "h_w_t_m": [h, w, t], "top_ratio": common.TOP_RATIO,
           "density": args.density, "mass_kg": ss.piece_mass(args.size, args.density),
           "tilt0_deg": args.tilt0, "block_face_x_m": x_w, "apex_m": list(apex),
-          "block_top_m": args.block_top, "tend": args.tend,
+          "block_top_m": BLOCK_TOP, "tend": args.tend,
           "record_period_s": rec.runner.iterPeriod * args.dt}
 os.makedirs(args.out, exist_ok=True)
 name = os.path.join(args.out, "shogi_leaning_mu%g%s" % (args.mu, args.tag))
