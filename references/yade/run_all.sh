@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerate every YADE reference under references/yade/results/ (called by `make references`).
-# Runs one YADE process at a time, single-threaded, headless (`yade -n -x`). About 55 min of
+# Runs one YADE process at a time, single-threaded, headless (`yade -n -x`). About 60 min of
 # one core in all (more wall time on a loaded machine); the chains are most of it. YADE's
 # stderr (with the benign "do_intersect ... Unhandled switch case:0" warnings of yade
 # 2023.02a) goes to $LOGDIR.
@@ -49,6 +49,18 @@ for mu in 0.1 0.5; do
   run one_onto_two_mu${mu}_st   shogi_one_onto_two.py --mu $mu --dt 5e-6 --young 4e8 --tag _stiff4
 done
 
+# A piece leaning against a fixed block slides down it (the ladder problem: the chain's sliding
+# contacts between leaning pieces), mu 0.1 / 0.3 / 0.5, from the chain's young 1e7 up to 6.4e9
+# (dt ~ 1/sqrt(young)), and dt/2 at 1e8 for mu 0.5; 2-100 s each.
+for mu in 0.1 0.3 0.5; do
+  run lean_mu${mu}_soft10  shogi_leaning.py --mu $mu --dt 2e-5 --young 1e7 --tag _soft10
+  run lean_mu${mu}         shogi_leaning.py --mu $mu --dt 1e-5 --young 1e8
+  run lean_mu${mu}_stiff4  shogi_leaning.py --mu $mu --dt 5e-6 --young 4e8 --tag _stiff4
+  run lean_mu${mu}_stiff16 shogi_leaning.py --mu $mu --dt 2.5e-6 --young 1.6e9 --tag _stiff16
+  run lean_mu${mu}_stiff64 shogi_leaning.py --mu $mu --dt 1.25e-6 --young 6.4e9 --tag _stiff64
+done
+run lean_mu0.5_halfdt shogi_leaning.py --mu 0.5 --dt 5e-6 --young 1e8 --tag _halfdt
+
 # 40-piece chain (softer contact, young 1e7, to afford 95k steps x ~80 contacts), and two
 # 20-piece variants compared over pieces 5..18: 4x stiffness (its start needs a stronger push,
 # omega0 12 rad/s: with 5 rad/s the first piece only leans on the second at young 4e7), and a
@@ -62,6 +74,10 @@ run chain20_stiff16 shogi_chain.py --n 20 --mu 0.5 --dt 1e-5 --young 1.6e8 --ome
 # Friction 0.3 at the dt2x run's settings: how much the front speeds up in YADE (qdemsph: +37 %
 # from mu 0.5 to a piece-piece mu 0.3, references/benchmarks/gpu/2026-11-25_h100_chain.json).
 run chain20_mu03   shogi_chain.py --n 20 --mu 0.3 --dt 4e-5 --young 1e7 --tag _mu03_dt2x
+# The same friction change at 4 x and 16 x young (the stiff4 / stiff16 runs' settings): the
+# leaning-piece case (shogi_leaning) loses most of its friction effect at young 1e7.
+run chain20_mu03_stiff4  shogi_chain.py --n 20 --mu 0.3 --dt 2e-5 --young 4e7 --omega0 12 --tag _mu03_stiff4
+run chain20_mu03_stiff16 shogi_chain.py --n 20 --mu 0.3 --dt 1e-5 --young 1.6e8 --omega0 12 --tag _mu03_stiff16
 
 $PY convergence.py "$OUT"
 echo "logs in $LOGDIR"
