@@ -32,8 +32,11 @@ YADE_RUNS = {"_soft10": 1e7, "": 1e8, "_stiff4": 4e8, "_stiff16": 1.6e9, "_stiff
 YADE_STIFFEST = "_stiff64"
 # Times against the rigid solution: +-5 % (README.md): the coarse pieces' lumped vertex
 # masses raise the inertia about the foot by ~4 % (+2 % in time, yade_shogi), and YADE's two
-# stiffest runs, which converge on the rigid solution, still differ by 2.5-4 % at mu 0.3-0.5.
+# stiffest runs, which converge on the rigid solution, still differ by 2.5-4 % at mu 0.3-0.5;
+# where those two runs lie further from the rigid time (t80 at mu 0.3 and 0.5, up to 7 %:
+# the slow start just past the static limit), their largest deviation (tol_t).
 TOL_T = 0.05
+YADE_CONVERGED = ("_stiff16", "_stiff64")
 # Friction effect (t85(mu) - t85(0.1)) / t85(0.1) against the rigid one: mu 0.3 +11.2 %
 # (+-3 points), mu 0.5 +68.8 % (+-10 points, 15 % of the effect): YADE's two stiffest runs
 # differ by 2.6 (mu 0.3) and 4 (mu 0.5) points and lie within 7.4 points of the rigid effect.
@@ -63,6 +66,12 @@ def yade_t(mu, tag, level):
     return yade(mu, tag)[2]["results"][f"t_tilt_{level:g}_s"]
 
 
+def tol_t(mu, level, rigid):
+    """Tolerance of a time against the rigid one: TOL_T, or more where YADE's converged runs
+    themselves differ more from the rigid time (the reference's spread bounds the claim)."""
+    return max(TOL_T, max(abs(yade_t(mu, tag, level) / rigid - 1.0) for tag in YADE_CONVERGED))
+
+
 def run_mu(qdemsph, case_out, variant, mu):
     sets = [s.replace("MU", str(mu)) for s in VARIANTS[variant]]
     run = must(qdemsph.run, SCENE, case_out / f"{variant}_mu{mu}",
@@ -90,8 +99,10 @@ def run_variant(variant, qdemsph, checks, case_out, checked):
         for lv in LEVELS:
             ref = rig[lv][0]
             if checked:
-                checks.check(m + f"t{lv:g}", ev[lv], kind="rel", reference=ref, tolerance=TOL_T, unit="s",
-                             wall_s=wall, note=f"tilt {lv:g} deg; rigid-body solution (rigid_ladder.py)")
+                checks.check(m + f"t{lv:g}", ev[lv], kind="rel", reference=ref, tolerance=tol_t(mu, lv, ref),
+                             unit="s", wall_s=wall,
+                             note=f"tilt {lv:g} deg; rigid-body solution (rigid_ladder.py); tolerance: 5 % or "
+                                  "YADE's two stiffest runs' deviation from it")
             else:
                 checks.info(m + f"t{lv:g}", ev[lv], unit="s", reference=ref, wall_s=wall,
                             note=f"tilt {lv:g} deg; reference: rigid-body solution")
