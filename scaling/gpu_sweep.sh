@@ -13,9 +13,9 @@
 # whole call: the parts run in order of importance, each with a share of what is left, and
 # a part whose next run would not fit is cut short (the record says which ran).
 # SWEEP_PARTS (default all) picks parts: cubes-gpu cubes-cpu cubes-copies dambreak-gpu
-# dambreak-cpu topple-gpu topple-cpu topple-copies balance-cpu balance-gpu probes (*-copies: N
-# independent one-rank runs at once, the node's own slowdown; run.py --launcher copies) (and balance-sph, not in all: the
-# SPH stage is not distributed yet, so the dam-break sweeps stop after their 1-rank run).
+# dambreak-cpu topple-gpu topple-cpu topple-copies balance-cpu balance-gpu balance-sph probes
+# (*-copies: N independent one-rank runs at once, the node's own slowdown, run.py --launcher
+# copies; balance-sph: the dam break in a closed tank, balanced against static, fluid-only).
 set -uo pipefail
 export PATH=$PATH:/usr/local/cuda/bin
 OUT=${1:?usage: scaling/gpu_sweep.sh OUTDIR [PACK]}
@@ -95,7 +95,7 @@ if [ -n "$GPU_RANKS" ]; then part cubes-gpu 0.12 cubes-weak --backend cuda --ran
 part cubes-cpu 0.35 cubes-weak --backend cpu --ranks "$CPU_RANKS"
 part cubes-copies 0.3 cubes-weak --backend cpu --ranks "$CPU_RANKS" --launcher copies
 if [ -n "$GPU_RANKS" ]; then part dambreak-gpu 0.08 dambreak-weak --backend cuda --ranks "$GPU_RANKS"; fi
-part dambreak-cpu 0.10 dambreak-weak --backend cpu --ranks "$CPU_RANKS"
+part dambreak-cpu 0.3 dambreak-weak --backend cpu --ranks "$CPU_RANKS"
 if [ -n "$GPU_RANKS" ]; then part topple-gpu 0.2 topple-weak --backend cuda --ranks "$GPU_RANKS"; fi
 part topple-cpu 0.40 topple-weak --backend cpu --ranks "$CPU_RANKS"
 part topple-copies 0.4 topple-weak --backend cpu --ranks "$CPU_RANKS" --launcher copies
@@ -103,8 +103,7 @@ if [ "$DIST" = 1 ]; then
   BAL=4; [ "$NCPU" -ge 16 ] && BAL=4,8
   part balance-cpu 0.6 slide-balance --backend cpu --ranks "$BAL" --variants balanced,static
   [ "$NGPU" -ge 2 ] && part balance-gpu 0.9 slide-balance --backend cuda --ranks 2 --variants balanced,static
-  # SPH is not distributed yet: the dam-break balance case only when asked for
-  [[ " $PARTS " == *" balance-sph "* ]] && part balance-sph 0.9 dambreak-balance --backend cpu --ranks "$BAL" --variants balanced,static
+  part balance-sph 0.9 dambreak-balance --backend cpu --ranks "$BAL" --variants balanced,static
 fi
 
 if want probes && [ "$(left)" -gt 30 ]; then
