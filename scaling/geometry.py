@@ -19,7 +19,7 @@ distributed stepper cuts them (docs/parallel.md; sfc.py is the Python twin of so
             is a contact vertex (on a body surface), to every rank owning a contact vertex in
             the band cells within two cells of its own (band cells of width
             B = 1.5 (2.5 r_prim + D_DEM), r_prim the largest surface-triangle radius).
-            SPH particles (not distributed yet): to every rank owning a leaf within the kernel
+            SPH particles: to every rank owning a leaf within the kernel
             support 2h of the particle (the band of docs/parallel.md item 2).
   -> ghosts per rank, messages, neighbours, the on/off-node split for nodes of 2..64 ranks.
 

@@ -117,7 +117,7 @@ NETWORKS = {
 class Options:
     vertex_bytes: float = 48.0    # x, v per ghost and force evaluation (measured: 45.5 B per
     #                               geometry-predicted ghost, 2 CPU ranks of the cube block)
-    particle_bytes: float = 112.0  # SPH (not distributed yet): x, v, rho, p, then rho, p again
+    particle_bytes: float = 112.0  # SPH: x, v, rho, p, then rho, p again (assumed)
     exchanges: int = 1            # halo exchanges per step (each: one message per neighbour)
     overlap: float = 0.0          # share of the compute that can hide communication (0: none)
     jitter: float = 0.01          # s: relative std. deviation of a rank's step time

@@ -355,7 +355,7 @@ def main(argv=None):
                "\nEfficiency against 1 rank (model.py; geometry from geometry_*.json, costs from costs.json). "
                "k: candidate contact pairs of a ghost surface vertex per owned one (1.4 measured on the stepper "
                "at wip-mpi aef1376; 0: each pair once). Assumed, not measured: the GPU contact cost per pair, "
-               "the network parameters (model.NETWORKS), and the SPH halo (SPH is not distributed yet)."] + pm
+               "the network parameters (model.NETWORKS), and the SPH halo bytes (the distributed fluid does not record them yet)."] + pm
     head = ["# qdemsph scaling report", "", f"{len(recs)} run records ({len(bad)} not ok) from "
             + ", ".join(a.inputs), ""]
     for r in bad:

@@ -87,7 +87,7 @@ def test_gate_tip_against_experiment(res, qdemsph, checks, case_out):
     checks.info(f"{res}.tip_y_peak_time", float(t[w][ky]), unit="s",
                 note=f"experiment {EXP_T[np.argmax(EXP_Y)]} s")
     checks.info(f"{res}.tip_z_max_abs", float(np.abs(uz).max()), unit="mm",
-                note="out-of-plane drift of the tip (the gate is held in the slab by two frictionless walls)")
+                note="out-of-plane drift of the tip (the gate's z = 0 face is held in z)")
     fl = run.summary.get("fluid", {})
     checks.info(f"{res}.fluid_particles", fl.get("n_fluid", 0), unit="particles")
     checks.info(f"{res}.wall_and_marker_particles", fl.get("n_wall", 0), unit="particles")
