@@ -1,7 +1,7 @@
 """Elastic gate of Antoci, Gallati & Sibilla 2007 (BENCHMARKS.md section 7): a rubber gate
 holding a water column opens under the water's pressure; the gate's free-tip horizontal and
 vertical displacement against the experiment's nine tabulated values (two-way SPH-QDEM
-coupling), at dx = 2.5 and 1.25 mm: long tier (65 s and 124 s on an H100; both fail today,
+coupling), at dx = 2.5 and 1.25 mm: long tier (25 s and 40 s on an H100; both fail today,
 README.md says why). Quick tier: a static solve of the coarse gate mesh under a uniform
 pressure, against Euler-Bernoulli, records how stiff the mesh is in bending. See README.md
 for the scene, the tolerances and the measured numbers."""
@@ -31,7 +31,7 @@ TOL_PEAK_T = 0.04  # s
 
 # Resolution -> (scene, tier of the coupled run, gate mesh cells). The gate mesh halves with
 # the fluid spacing. The coupled runs are long (the coarse one ~15 min on one shared core here,
-# 65 s and 124 s on an H100) and fail the comparison (README.md): long tier.
+# 25 s and 40 s on an H100) and fail the comparison (README.md): long tier.
 RES = {
     "dx2.5mm": ("scene_coarse.yaml", "full", "[4, 32, 1]"),
     "dx1.25mm": ("scene_fine.yaml", "full", "[8, 64, 1]"),
