@@ -26,6 +26,7 @@
 #include "io/scene_yaml.hpp"
 #include "model/model.hpp"
 #include "parallel/balance.hpp"
+#include "parallel/collectives.hpp"
 #include "parallel/distributed_backend_mpi.hpp"
 #include "parallel/local_model.hpp"
 
@@ -285,18 +286,7 @@ TEST(Distributed, RestartOnHalfTheRanks) {
   }
   // "Write and read back": every rank gets everything, then the ranks of the half-size
   // communicator each adopt a contiguous share of the entries.
-  auto all_of = [&](const auto& mine) {
-    using T = typename std::decay_t<decltype(mine)>::value_type;
-    const int p = size_of();
-    int nb = static_cast<int>(mine.size() * sizeof(T));
-    std::vector<int> cnt(p), dsp(p + 1, 0);
-    MPI_Allgather(&nb, 1, MPI_INT, cnt.data(), 1, MPI_INT, MPI_COMM_WORLD);
-    for (int k = 0; k < p; ++k) dsp[k + 1] = dsp[k] + cnt[k];
-    std::vector<T> all(dsp[p] / sizeof(T));
-    MPI_Allgatherv(mine.data(), nb, MPI_BYTE, all.data(), cnt.data(), dsp.data(), MPI_BYTE,
-                   MPI_COMM_WORLD);
-    return all;
-  };
+  auto all_of = [](const auto& mine) { return allgatherv(MPI_COMM_WORLD, mine); };
   StateSlice file;
   file.vertex = all_of(saved.vertex);
   file.x = all_of(saved.x);
