@@ -31,7 +31,8 @@ class MpiFluidExchange final : public FluidExchange {
         every_(o.rebalance_every),
         threshold_(o.rebalance_threshold),
         max_cell_(o.max_cell_cost),
-        band_(support / 2) {
+        skin_(kFluidSkin * support),
+        band_((support + skin_) / 2) {
     MPI_Comm_dup(comm, &comm_);
     MPI_Comm_rank(comm_, &me_);
     MPI_Comm_size(comm_, &np_);
@@ -47,9 +48,8 @@ class MpiFluidExchange final : public FluidExchange {
     const std::int64_t n = static_cast<std::int64_t>(p.size());
     std::vector<double> cost(n);
     for (std::int64_t i = 0; i < n; ++i) cost[i] = p.type[i] == kSphFluid ? 1.0 : kFluidWallCost;
-    if (dec_.splitters.empty() || rebalance_due(cost))
-      dec_ = balance(comm_, p.x, cost, curve_, max_cell_);
-    ++calls_;
+    if (dec_.splitters.empty() || rebalance_) dec_ = balance(comm_, p.x, cost, curve_, max_cell_);
+    rebalance_ = false;
 
     // Owned particles to the owners of their positions.
     std::vector<int> dest(n);
@@ -60,6 +60,8 @@ class MpiFluidExchange final : public FluidExchange {
     mp.begin(fields_of(p));
     mp.finish(fields_of(o));
     const std::int64_t nown = mp.n_new();
+    load_ = 0;
+    for (std::int64_t i = 0; i < nown; ++i) load_ += o.type[i] == kSphFluid ? 1.0 : kFluidWallCost;
 
     // Ghosts: the band cells of this rank's owned particles, published to all; a particle
     // goes to every other rank with an owned particle in the 5^3 cells around its own. A cell
@@ -105,9 +107,22 @@ class MpiFluidExchange final : public FluidExchange {
     return nown;
   }
 
-  void refresh(std::span<const std::span<double>> fields) override {
+  bool keep(double moved) override {
+    ++steps_;
+    if (rebalance_due()) {
+      rebalance_ = true;
+      return false;
+    }
+    MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_DOUBLE, MPI_MAX, comm_);
+    return moved <= skin_ / 2;
+  }
+  double skin() const override { return skin_; }
+
+  void refresh(std::span<const std::span<Vec3>> vec3,
+               std::span<const std::span<double>> scalar) override {
     std::vector<CommField> f;
-    for (auto s : fields) f.push_back(comm_field(s.data(), static_cast<std::int64_t>(s.size())));
+    for (auto s : vec3) f.push_back(comm_field(s.data(), static_cast<std::int64_t>(s.size())));
+    for (auto s : scalar) f.push_back(comm_field(s.data(), static_cast<std::int64_t>(s.size())));
     halo_->gather_begin(f);
     halo_->gather_finish(f);
   }
@@ -176,13 +191,11 @@ class MpiFluidExchange final : public FluidExchange {
     return true;
   }
 
-  // Every rebalance_every calls: the owned cost's max / mean - 1 over the ranks against the
+  // Every rebalance_every steps: the owned cost's max / mean - 1 over the ranks against the
   // threshold (the same decision on every rank).
-  bool rebalance_due(const std::vector<double>& cost) {
-    if (every_ <= 0 || calls_ == 0 || calls_ % every_ != 0) return false;
-    double load = 0;
-    for (double c : cost) load += c;
-    double total = load, most = load;
+  bool rebalance_due() {
+    if (every_ <= 0 || steps_ % every_ != 0) return false;
+    double total = load_, most = load_;
     allreduce_sum_same(comm_, &total, 1);
     MPI_Allreduce(MPI_IN_PLACE, &most, 1, MPI_DOUBLE, MPI_MAX, comm_);
     const double mean = total / np_;
@@ -194,8 +207,11 @@ class MpiFluidExchange final : public FluidExchange {
   Curve curve_;
   long every_ = 0;
   double threshold_ = 0, max_cell_ = 0;
-  double band_ = 1;  // band cell width: half the kernel support
-  long calls_ = 0;
+  double skin_ = 0;  // the ghost band's margin beyond the kernel support
+  double band_ = 1;  // band cell width: half of support + skin
+  long steps_ = 0;   // keep() calls
+  double load_ = 0;  // owned cost at the last distribute() (the owned set stands until the next)
+  bool rebalance_ = false;  // the next distribute() cuts the partition again
   Decomposition dec_;
   std::unique_ptr<HaloPlan> halo_;
 };

@@ -3,13 +3,15 @@
 //
 // Ownership: a particle (fluid or wall) belongs to the rank whose piece of the space-filling
 // curve holds its position (balance.hpp: the fluid's own cell tree, cut by particle cost:
-// 1 per fluid particle, kFluidWallCost per wall particle). Each compute() migrates the owned
-// particles to the owners of their new positions (MigratePlan) and rebuilds the ghosts
-// (HaloPlan): a particle goes to every rank that owns a particle in the 5^3 band cells of
-// half a kernel support around its own cell, i.e. to every rank with an owned particle within
-// one support of it. The plans are rebuilt at every step (no skin: the fluid re-sorts every
-// step anyway). Every rebalance_every steps the partition is cut again when the owned cost's
-// max / mean - 1 exceeds rebalance_threshold.
+// 1 per fluid particle, kFluidWallCost per wall particle). distribute() migrates the owned
+// particles to the owners of their positions (MigratePlan) and builds the ghosts (HaloPlan):
+// a particle goes to every rank that owns a particle in the 5^3 band cells of half a kernel
+// support + skin around its own cell, i.e. to every rank with an owned particle within
+// support + skin of it. The stage calls distribute() only when keep() says the layout no
+// longer holds: some particle moved more than skin / 2 since (one MPI_Allreduce of the
+// largest displacement per step), or the partition is cut again (every rebalance_every
+// steps, when the owned cost's max / mean - 1 exceeds rebalance_threshold); between, the
+// ghosts' x and v are refreshed through the same HaloPlan at each step.
 #pragma once
 
 #include <memory>
@@ -23,7 +25,14 @@ namespace qdemsph {
 // (Adami) against a fluid particle's two passes over all neighbours.
 inline constexpr double kFluidWallCost = 0.25;
 
-// support: the kernel support 2h (the ghost band's width).
+// The ghost band's skin as a fraction of the kernel support: a wider band holds more ghosts
+// (band volume ~ (support + skin)^3 around a piece), a narrower one is rebuilt more often.
+// A quarter support (h / 2, ~25 % more band width) lasts at least ~11 steps: at the CFL limit
+// (dt = 0.25 h / (c + v), c >= 10 v) a particle moves < 0.023 h per step, skin / 2 = h / 4;
+// the 3,280-particle test dam break (test_distributed_fluid.cpp) rebuilds after 37-133 steps.
+inline constexpr double kFluidSkin = 0.25;
+
+// support: the kernel support 2h (the ghost band is support (1 + kFluidSkin) wide).
 std::unique_ptr<FluidExchange> make_fluid_exchange(const ParallelOptions& options, double support);
 
 }  // namespace qdemsph

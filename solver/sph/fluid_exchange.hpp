@@ -2,15 +2,22 @@
 // the implementation is parallel/fluid_exchange.cpp; a one-rank stage has none.
 //
 // A rank's particles are its owned ones (fluid and walls, by the decomposition's owner of
-// their position) followed by ghosts: copies of other ranks' particles within one kernel
-// support of an owned particle. Ghost slots are refreshed from their owners after each pass
-// that changes what the next pass reads (density, then wall pressure).
+// their position at the last distribute()) followed by ghosts: copies of other ranks'
+// particles within one kernel support + skin of an owned particle then. The layout (who owns
+// what, who holds which ghosts) stands while keep() says so: while no particle has moved more
+// than skin / 2 since distribute(), every particle within one support of an owned particle,
+// and every particle of an owned particle's neighbour cell, is still held. Meanwhile ghost
+// slots are refreshed from their owners: positions and velocities at each step, then after
+// each pass that changes what the next pass reads (density, then wall pressure).
 //
 // Order key: every particle carries the key of its place in the order one rank would have it
 // in (sph_stage.hpp: (group, cell) of the last sort, then its place in that cell; before the
 // first sort its global id). A rank that holds every particle of a cell puts them in the
 // one-rank order by sorting its particles by this key before the stable cell sort, so each
 // particle sums its neighbours in the one-rank order and the run equals one rank bit for bit.
+// While the layout stands the rank's stable cell sort keeps that order by itself (its order
+// within a cell is the one-rank order restricted to the particles it holds, and a stable sort
+// of such an order by the new cells is again one), so only distribute() needs the keys.
 #pragma once
 
 #include <cstdint>
@@ -37,9 +44,17 @@ class FluidExchange {
   // In: this rank's owned particles. Out: the particles it owns now (migrated to the owner of
   // their position), then the ghosts it needs; returns the owned count. Collective.
   virtual std::int64_t distribute(FluidParticles& p) = 0;
+  // At each step after the first distribute(): true when the layout still holds, given this
+  // rank's largest displacement of an owned particle since distribute() (false: the largest
+  // over the ranks exceeds skin() / 2, or the partition is due to be cut again; call
+  // distribute()). The same answer on every rank. Collective.
+  virtual bool keep(double moved) = 0;
+  // The ghost band's margin beyond the kernel support.
+  virtual double skin() const = 0;
   // Owned values -> ghost slots of the layout distribute() returned (fields of n_total
   // items, owned first). Collective.
-  virtual void refresh(std::span<const std::span<double>> fields) = 0;
+  virtual void refresh(std::span<const std::span<Vec3>> vec3,
+                       std::span<const std::span<double>> scalar) = 0;
   // Reductions over the ranks, the same result on every rank. Collective.
   virtual void sum(std::span<double> v) = 0;
   virtual void max(std::span<double> v) = 0;

@@ -9,8 +9,9 @@
 //   the next sort of a distributed run: fluid_exchange.hpp), slot (int64: the index in the
 //   layout of the last redistribution; slot >= n_own: a ghost).
 // On several ranks (a FluidExchange) the particles are the rank's owned ones and ghosts within
-// one kernel support; every loop skips ghosts, whose values come from their owners: x, v, rho,
-// m at each compute(), rho, p, m again after the density and after the wall pressure pass.
+// one kernel support + skin; every loop skips ghosts, whose values come from their owners: x, v
+// at each compute() (all fields when the layout is rebuilt: fluid_exchange.hpp, keep()), rho,
+// p, m after the density and after the wall pressure pass.
 // Wall particles are fixed; markers move with the bodies (sph/solid_coupling.hpp); the p and rho
 // of both come from the fluid by Adami extrapolation.
 //
@@ -22,6 +23,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <memory>
 #include <numeric>
 #include <type_traits>
@@ -161,7 +163,12 @@ class SphStage final : public FluidStage {
     // The fluid step since the last compute: the density update's dt and the markers' H.
     const double ddt = pending_dt_;
     pending_dt_ = 0;
-    if (ex_) redistribute();
+    if (ex_) {
+      if (laid_out_ && ex_->keep(moved()))
+        refresh_ghosts({&x_, &v_}, {});
+      else
+        redistribute();
+    }
     if (coupling_) coupling_->place(x_.view(), v_.view(), gid_.cview(), nf_, nf_ + nm_, ddt);
     sort();
     const SphParams P = P_;
@@ -205,7 +212,7 @@ class SphStage final : public FluidStage {
           p[i] = P.eos.pressure(rho[i]);
           pr[i] = p[i] / (rho[i] * rho[i]);
         });
-    if (ex_) refresh_ghosts();
+    if (ex_) refresh_pressure();
     // Wall and marker pressure and density by extrapolation from the fluid (Adami, with gravity
     // only: solid_coupling.hpp says why a body's acceleration is left out). Mass rho V with the
     // particle's volume: dx^3 for walls, the body lattice cell for markers.
@@ -231,7 +238,7 @@ class SphStage final : public FluidStage {
             m[i] = rho[i] * (q < nm ? mvol[gid[i] - g0] : wall_volume);
           });
     }
-    if (ex_) refresh_ghosts();
+    if (ex_) refresh_pressure();
     // Pair sums: acceleration of fluid particles.
     const auto a = a_.view();
     const bool wall_visc = P.wall_viscosity;
@@ -400,9 +407,9 @@ class SphStage final : public FluidStage {
   const SphParams& params() const override { return P_; }
   std::size_t device_bytes() const override {
     return x_.bytes() + v_.bytes() + a_.bytes() + rho_.bytes() + p_.bytes() + drho_.bytes() +
-           pr_.bytes() + m_.bytes() + type_.bytes() + gid_.bytes() + key_.bytes() + slot_.bytes() +
-           tmp3_.bytes() + tmpd_.bytes() + tmpu_.bytes() + tmpt_.bytes() + tmpi_.bytes() +
-           keys_.bytes() + start_.bytes() + order_.bytes() + scratch_.bytes() +
+           pr_.bytes() + m_.bytes() + x0_.bytes() + type_.bytes() + gid_.bytes() + key_.bytes() +
+           slot_.bytes() + tmp3_.bytes() + tmpd_.bytes() + tmpu_.bytes() + tmpt_.bytes() +
+           tmpi_.bytes() + keys_.bytes() + start_.bytes() + order_.bytes() + scratch_.bytes() +
            (coupling_ ? coupling_->bytes() : 0);
   }
 
@@ -487,7 +494,12 @@ class SphStage final : public FluidStage {
               in_order(q.gid), in_order(q.key));
     slot_.assign(ord);
     n_own_ = nown;
-    // The neighbour grid: the window of the whole box's cells that holds this rank's particles.
+    x0_.assign(std::vector<Vec3>(q.x.begin(), q.x.begin() + nown));
+    laid_out_ = true;
+    // The neighbour grid: the window of the whole box's cells that holds this rank's particles,
+    // widened by the cells they can reach while the layout stands (skin / 2), so none leaves it
+    // (coordinates outside a window are clamped into its border cells).
+    const int margin = static_cast<int>(std::ceil(0.5 * ex_->skin() * grid_all_.inv_cell));
     int lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
     for (int a = 0; a < 3; ++a) {
       lo[a] = grid_all_.n[a] - 1;
@@ -496,29 +508,55 @@ class SphStage final : public FluidStage {
         lo[a] = std::min(lo[a], c), hi[a] = std::max(hi[a], c);
       }
       if (q.x.empty()) lo[a] = 0;  // no particle: one cell
-      hi[a] = std::max(hi[a], lo[a]);
+      lo[a] = std::max(lo[a] - margin, 0);
+      hi[a] = std::min(std::max(hi[a], lo[a]) + margin, grid_all_.n[a] - 1);
     }
     grid_ = grid_all_.window(lo, hi);
     start_.resize(kSphGroups * grid_.count() + 1);
   }
 
-  // Distributed: rho, p, m of the ghosts from their owners; their p / rho^2 as the owners have it.
-  void refresh_ghosts() {
+  // Distributed: the largest displacement of an owned particle since the last redistribute().
+  double moved() {
+    const auto x = x_.cview(), x0 = x0_.cview();
+    const auto slot = slot_.cview();
+    const std::int64_t nown = n_own_;
+    return reduce_max(
+        Exec{}, nf_,
+        QDEMSPH_LAMBDA(std::int64_t i) { return slot[i] < nown ? norm(x[i] - x0[slot[i]]) : 0.0; },
+        0.0);
+  }
+
+  // Distributed: the ghosts' entries of the given buffers from their owners (through host
+  // copies in the exchange's layout, slot order).
+  void refresh_ghosts(std::initializer_list<Vec3Buffer*> vec3,
+                      std::initializer_list<Buffer<double>*> scalar) {
     const auto slot = slot_.to_host();
-    std::vector<double> h[3] = {rho_.to_host(), p_.to_host(), m_.to_host()};
-    std::vector<double> s[3];
-    for (int f = 0; f < 3; ++f) {
-      s[f].resize(h[f].size());
-      for (std::size_t i = 0; i < slot.size(); ++i) s[f][slot[i]] = h[f][i];
-    }
-    const std::span<double> fields[3] = {s[0], s[1], s[2]};
-    ex_->refresh(fields);
-    for (int f = 0; f < 3; ++f)
+    auto to_layout = [&](const auto& h) {
+      std::remove_cvref_t<decltype(h)> s(h.size());
+      for (std::size_t i = 0; i < slot.size(); ++i) s[slot[i]] = h[i];
+      return s;
+    };
+    auto from_layout = [&](auto& b, auto& h, const auto& s) {
       for (std::size_t i = 0; i < slot.size(); ++i)
-        if (slot[i] >= n_own_) h[f][i] = s[f][slot[i]];
-    rho_.assign(h[0]);
-    p_.assign(h[1]);
-    m_.assign(h[2]);
+        if (slot[i] >= n_own_) h[i] = s[slot[i]];
+      b->assign(h);
+    };
+    std::vector<std::vector<Vec3>> hv, sv;
+    std::vector<std::vector<double>> hs, ss;
+    for (auto* b : vec3) hv.push_back(b->to_host()), sv.push_back(to_layout(hv.back()));
+    for (auto* b : scalar) hs.push_back(b->to_host()), ss.push_back(to_layout(hs.back()));
+    const std::vector<std::span<Vec3>> fv(sv.begin(), sv.end());
+    const std::vector<std::span<double>> fs(ss.begin(), ss.end());
+    ex_->refresh(fv, fs);
+    std::size_t k = 0;
+    for (auto* b : vec3) from_layout(b, hv[k], sv[k]), ++k;
+    k = 0;
+    for (auto* b : scalar) from_layout(b, hs[k], ss[k]), ++k;
+  }
+
+  // Distributed: rho, p, m of the ghosts from their owners; their p / rho^2 as the owners have it.
+  void refresh_pressure() {
+    refresh_ghosts({}, {&rho_, &p_, &m_});
     const auto rho = rho_.cview(), p = p_.cview();
     const auto pr = pr_.view();
     const auto sl = slot_.cview();
@@ -557,6 +595,7 @@ class SphStage final : public FluidStage {
     std::vector<std::int64_t> slot(x.size());
     std::iota(slot.begin(), slot.end(), std::int64_t{0});
     slot_.assign(slot);
+    laid_out_ = false;
     a_.resize(n_);
     p_.resize(n_);
     drho_.resize(n_);
@@ -567,10 +606,12 @@ class SphStage final : public FluidStage {
   std::int64_t n_global_ = 0, nf_global_ = 0;  // particles and fluid particles of all ranks
   std::int64_t n_ = 0, nf_ = 0, nm_ = 0;       // this rank's, ghosts included
   std::int64_t n_own_ = 0;                     // this rank's owned particles
+  bool laid_out_ = false;   // distributed: the exchange's layout is this rank's particles
   double pending_dt_ = 0;   // time drifted since the last compute(): the density update's dt
   double wall_volume_ = 0;  // dx^3
   Vec3Buffer x_{S}, v_{S}, a_{S}, tmp3_{S};
   Buffer<double> rho_{S}, p_{S}, drho_{S}, m_{S}, tmpd_{S};
+  Vec3Buffer x0_{S};      // distributed: owned positions at the last redistribute(), by slot
   Buffer<double> pr_{S};  // p / rho^2 of this step (set after the sort, not carried over)
   Buffer<std::uint8_t> type_{S}, tmpt_{S};
   Buffer<std::uint64_t> gid_{S}, key_{S}, tmpu_{S};
