@@ -198,9 +198,8 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       exchange = make_fluid_exchange(parallel_options(scene.parallel),
                                      fluid_setup->params.kernel.support());
 #endif
-    // Distributed, a coupled fluid is refused by the stage (an input error naming the key).
     SolidViews solid;
-    if (fluid_setup->n_marker > 0 && !exchange) solid = be->solid_views();
+    if (fluid_setup->n_marker > 0) solid = be->solid_views();
     fluid = make_fluid_stage(backend_name, *fluid_setup, fluid_setup->n_marker ? &solid : nullptr,
                              std::move(exchange));
   }

@@ -8,6 +8,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -54,14 +55,27 @@ struct BackendState {
   std::optional<ContactState> contact;  // present when the model has contact
 };
 
-// The solid state a fluid couples to (sph/solid_coupling.hpp), in the backend's memory space.
-// compute_forces adds fc (the fluid's force on each vertex) to f; the coupling writes fc, f and v.
+// A distributed backend's exchange around the coupling (parallel/distributed_backend.hpp): its
+// SolidViews are whole-model arrays by global vertex id; pull() fills them for the coupled
+// vertices before the coupling reads them, push() hands the owned ones' f, v, fc back after it
+// wrote them.
+class SolidSync {
+ public:
+  virtual ~SolidSync() = default;
+  virtual void pull(std::span<const std::int32_t> coupled) = 0;
+  virtual void push(std::span<const std::int32_t> coupled) = 0;
+};
+
+// The solid state a fluid couples to (sph/solid_coupling.hpp), in the backend's memory space,
+// indexed by the model's vertex ids. compute_forces adds fc (the fluid's force on each vertex)
+// to f; the coupling writes fc, f and v.
 struct SolidViews {
   Space space = Space::Host;
   Vec3CView x;
   Vec3View v, f, fc;
   View<const double> inv_mass;
   View<const std::uint8_t> held;  // components held by constraints (bits x, y, z)
+  SolidSync* sync = nullptr;      // distributed: the exchange around the coupling; else none
 };
 
 class Backend {

@@ -85,7 +85,7 @@ struct Weights {
   double vertex = 0.25, tet = 1.0, contact = 1.0;
 };
 
-class DistributedImpl final : public DistributedBackend {
+class DistributedImpl final : public DistributedBackend, private SolidSync {
  public:
   DistributedImpl(MPI_Comm comm, std::unique_ptr<Backend> local, const ParallelOptions& opt)
       : local_(std::move(local)),
@@ -375,6 +375,78 @@ class DistributedImpl final : public DistributedBackend {
   void unpack_halo(const double*) override { unsupported("unpack_halo"); }
   void mark_positions() override { unsupported("mark_positions"); }
   double max_moved() override { unsupported("max_moved"); }
+
+  // ---- fluid coupling (sph/solid_coupling.hpp) ---------------------------------------------
+  // The coupling reads and writes whole-model arrays by global vertex id, the same on every
+  // rank: pull() gives it the x, v of every coupled vertex (the owners' values, one allgather;
+  // fixed bodies do not move) and the f, inv_mass, held of this rank's owned ones (others:
+  // inv_mass 0, so it leaves their v alone); since every rank gathers the same fluid force on
+  // every coupled vertex (the stage sums the marker forces over the ranks), fc here is every
+  // coupled vertex's, and push() (and each rebuild) gives the owned ones theirs. Host memory:
+  // a CUDA rank's coupling is refused.
+  SolidViews solid_views() override {
+    if (local_->solid_views().space != Space::Host)
+      throw InputError(
+          "fluid.couple_bodies: a coupled fluid on several MPI ranks runs on the cpu backend "
+          "only so far (docs/parallel.md)");
+    const Model& g = *g_;
+    cx_.assign(g.x);
+    cv_.assign(g.v);
+    cf_.assign(std::vector<Vec3>(g.n_vertices()));
+    cfc_.assign(std::vector<Vec3>(g.n_vertices()));
+    cinv_.assign(std::vector<double>(g.n_vertices(), 0.0));
+    cheld_.assign(std::vector<std::uint8_t>(g.n_vertices(), 0));
+    coupled_ = true;
+    install_coupling();
+    SolidViews s;
+    s.x = cx_.cview();
+    s.v = cv_.view();
+    s.f = cf_.view();
+    s.fc = cfc_.view();
+    s.inv_mass = cinv_.cview();
+    s.held = cheld_.cview();
+    s.sync = this;
+    return s;
+  }
+
+  void pull(std::span<const std::int32_t> coupled) override {
+    if (is_coupled_.empty()) {
+      is_coupled_.assign(g_->n_vertices(), 0);
+      for (auto v : coupled) is_coupled_[v] = 1;
+    }
+    struct Moved {
+      std::int64_t gid;
+      Vec3 x, v;
+    };
+    std::vector<Moved> mine;
+    const SolidViews& l = local_sv_;
+    for (std::int64_t i = 0; i < L_.n_owned; ++i)
+      if (is_coupled_[L_.vertices[i]]) mine.push_back({L_.vertices[i], l.x[i], l.v[i]});
+    const auto x = cx_.view(), v = cv_.view(), f = cf_.view();
+    const auto inv = cinv_.view();
+    const auto held = cheld_.view();
+    for (const Moved& m : allgatherv(comm_, mine)) x.set(m.gid, m.x), v.set(m.gid, m.v);
+    for (auto c : coupled) inv[c] = 0.0;
+    for (std::int64_t i = 0; i < L_.n_owned; ++i) {
+      const std::int64_t gid = L_.vertices[i];
+      if (!is_coupled_[gid]) continue;
+      f.set(gid, l.f[i]);
+      inv[gid] = l.inv_mass[i];
+      held[gid] = l.held[i];
+    }
+  }
+
+  void push(std::span<const std::int32_t>) override {
+    const SolidViews& l = local_sv_;
+    const auto v = cv_.cview(), f = cf_.cview(), fc = cfc_.cview();
+    for (std::int64_t i = 0; i < L_.n_owned; ++i) {
+      const std::int64_t gid = L_.vertices[i];
+      if (!is_coupled_[gid]) continue;
+      l.v.set(i, v[gid]);
+      l.f.set(i, f[gid]);
+      l.fc.set(i, fc[gid]);
+    }
+  }
 
   // ---- records and the checkpoint hook -----------------------------------------------------
 
@@ -1016,7 +1088,18 @@ class DistributedImpl final : public DistributedBackend {
     local_->mark_positions();
     L_ = std::move(L);
     ids_ = std::move(lm.ids);
+    if (coupled_) install_coupling();
     ++rebuilds_;
+  }
+
+  // The local backend's coupling views (a new upload drops them), with the fluid force of the
+  // owned coupled vertices.
+  void install_coupling() {
+    local_sv_ = local_->solid_views();
+    if (is_coupled_.empty()) return;  // nothing coupled yet: fc is zero
+    const auto fc = cfc_.cview();
+    for (std::int64_t i = 0; i < L_.n_owned; ++i)
+      if (is_coupled_[L_.vertices[i]]) local_sv_.fc.set(i, fc[L_.vertices[i]]);
   }
 
   MPI_Comm comm_ = MPI_COMM_NULL;
@@ -1048,6 +1131,13 @@ class DistributedImpl final : public DistributedBackend {
   bool pending_after_ = false;
   std::vector<RebalanceEntry> log_;
   std::int64_t migrated_bytes_ = 0, halo_bytes_ = 0, exchanges_ = 0;
+  // Fluid coupling: whole-model arrays by global vertex id (solid_views()).
+  bool coupled_ = false;
+  SolidViews local_sv_;                   // the local backend's, local ids
+  std::vector<std::uint8_t> is_coupled_;  // per global vertex: carries fluid markers
+  Vec3Buffer cx_{Space::Host}, cv_{Space::Host}, cf_{Space::Host}, cfc_{Space::Host};
+  Buffer<double> cinv_{Space::Host};
+  Buffer<std::uint8_t> cheld_{Space::Host};
 };
 
 }  // namespace

@@ -24,6 +24,10 @@
 // to round-off; with k = 1 the scheme is the shared velocity Verlet (Fourey et al. 2017, J.
 // Fluids Struct. 70, conservative sub-cycling of an SPH-FE coupling).
 //
+// Distributed (docs/parallel.md, item 8): the SolidViews are whole-model arrays with a SolidSync;
+// place() pulls the coupled vertices' x, v first, the stage sums the marker forces over the
+// ranks, and apply() pushes the owned vertices' f, v, fc after gathering them as one rank does.
+//
 // Data: marker topology tv[c * nm + k], w[c * nm + k] (SoA); per-vertex CSR over coupled vertices.
 #pragma once
 
@@ -32,6 +36,7 @@
 #include "core/error.hpp"
 #include "core/memory.hpp"
 #include "integrate/backend.hpp"
+#include "sph/fluid_setup.hpp"
 #include "sph/solid_markers.hpp"
 
 namespace qdemsph {
@@ -61,6 +66,7 @@ class SolidCoupling {
     off_.assign(m.offset);
     em_.assign(m.entry_marker);
     ew_.assign(m.entry_weight);
+    if (solid.sync) vertices_ = m.vertices;
   }
 
   std::int64_t size() const { return nm_; }
@@ -68,9 +74,10 @@ class SolidCoupling {
   View<const double> volume() const { return vol_.cview(); }
   Vec3View force() { return force_.view(); }
 
-  // Markers are the stage's particles [b, e) (sorted order; marker index = gid - gid0).
-  void place(Vec3View x, Vec3View v, View<const std::uint64_t> gid, std::int64_t b, std::int64_t e,
-             double H) {
+  // Markers are the stage's particles of type kSphSolid among [0, n) (marker index = gid - gid0).
+  void place(Vec3View x, Vec3View v, View<const std::uint64_t> gid, View<const std::uint8_t> type,
+             std::int64_t n, double H) {
+    if (solid_.sync) solid_.sync->pull(vertices_);
     const std::int64_t nm = nm_;
     const std::uint64_t g0 = gid0_;
     const auto tv = tv_.cview();
@@ -78,8 +85,8 @@ class SolidCoupling {
     const Vec3CView xs = solid_.x;
     const Vec3CView vs{solid_.v.x, solid_.v.y, solid_.v.z, solid_.v.n};
     for_each(
-        Exec{}, e - b, QDEMSPH_LAMBDA(std::int64_t q) {
-          const std::int64_t i = b + q;
+        Exec{}, n, QDEMSPH_LAMBDA(std::int64_t i) {
+          if (type[i] != kSphSolid) return;
           const std::int64_t k = static_cast<std::int64_t>(gid[i] - g0);
           Vec3 xn{}, vn{};
           for (int c = 0; c < 4; ++c) {
@@ -113,6 +120,7 @@ class SolidCoupling {
           const double im = s.inv_mass[vi];
           if (im > 0) s.v.set(vi, s.v[vi] + unheld((hh * im) * d, s.held[vi]));
         });
+    if (solid_.sync) solid_.sync->push(vertices_);
   }
 
   // Total fluid force on the bodies [N] (sum over markers).
@@ -141,6 +149,7 @@ class SolidCoupling {
   Buffer<double> w_{S}, vol_{S}, ew_{S};
   Buffer<std::int64_t> off_{S};
   Vec3Buffer force_{S};
+  std::vector<std::int32_t> vertices_;  // distributed: the coupled vertices (host copy of cv_)
 };
 
 }  // namespace qdemsph

@@ -106,16 +106,10 @@ class SphStage final : public FluidStage {
         CellGrid::cover(f.lo, f.hi, P_.kernel.support() / kSphCellsPerSupport, f.z0, f.period_z);
     grid_ = grid_all_;
     start_.resize(kSphGroups * grid_.count() + 1);
-    if (ex_) {
-      if (nm_ > 0)
-        throw InputError(
-            "fluid.couple_bodies: the fluid's coupling to bodies is not distributed over MPI "
-            "ranks yet; run coupled fluid scenes on one rank (docs/parallel.md)");
-      if (f.period_z > 0)
-        throw InputError(
-            "fluid.periodic_z: a periodic fluid is not distributed over MPI ranks yet; run it "
-            "on one rank (docs/parallel.md)");
-    }
+    if (ex_ && f.period_z > 0)
+      throw InputError(
+          "fluid.periodic_z: a periodic fluid is not distributed over MPI ranks yet; run it "
+          "on one rank (docs/parallel.md)");
     if (double(kSphGroups) * double(grid_all_.count()) >= std::ldexp(1.0, 64 - kSphKeyShift))
       throw InputError(
           "fluid: too many neighbour cells for the particle order keys (coarsen "
@@ -163,13 +157,15 @@ class SphStage final : public FluidStage {
     // The fluid step since the last compute: the density update's dt and the markers' H.
     const double ddt = pending_dt_;
     pending_dt_ = 0;
+    // Markers first, so that a distributed layout's skin rule sees where they moved (every rank
+    // places the markers it holds from the same vertex positions: a ghost's is its owner's).
+    if (coupling_) coupling_->place(x_.view(), v_.view(), gid_.cview(), type_.cview(), n_, ddt);
     if (ex_) {
       if (laid_out_ && ex_->keep(moved()))
         refresh_ghosts({&x_, &v_}, {});
       else
         redistribute();
     }
-    if (coupling_) coupling_->place(x_.view(), v_.view(), gid_.cview(), nf_, nf_ + nm_, ddt);
     sort();
     const SphParams P = P_;
     const CellGrid g = grid_;
@@ -220,7 +216,7 @@ class SphStage final : public FluidStage {
       const double wall_volume = wall_volume_;
       const std::uint64_t g0 = coupling_ ? coupling_->gid0() : 0;
       const auto mvol = coupling_ ? coupling_->volume() : View<const double>{};
-      const std::int64_t nm = nm_;
+      const std::int64_t nm = nml_;
       for_each(
           Exec{}, n_ - nf, QDEMSPH_LAMBDA(std::int64_t q) {
             const std::int64_t i = nf + q;
@@ -262,12 +258,18 @@ class SphStage final : public FluidStage {
         MinBlocks<3>{});  // 90 registers left 2 blocks an SM; 3 fit in 85 (80, 28 B spilled)
     if (coupling_) {
       // The fluid's force on each marker: the exact negative of each pair force the marker
-      // exerts on the fluid (sph_pair.hpp), so the coupling conserves momentum.
+      // exerts on the fluid (sph_pair.hpp), so the coupling conserves momentum. Distributed:
+      // each marker's by its owner, then every marker's on every rank (a sum over the ranks in
+      // which one term is not zero: exact), so every rank gathers the same vertex forces.
       const auto F = coupling_->force();
       const std::uint64_t g0 = coupling_->gid0();
+      if (ex_)
+        for_each(
+            Exec{}, nm_, QDEMSPH_LAMBDA(std::int64_t k) { F.set(k, Vec3{}); });
       for_each(
-          Exec{}, nm_, QDEMSPH_LAMBDA(std::int64_t q) {
+          Exec{}, nml_, QDEMSPH_LAMBDA(std::int64_t q) {
             const std::int64_t i = nf + q;
+            if (slot[i] >= nown) return;
             const PairState si{x[i], v[i], rho[i], m[i], pr[i]};
             Vec3 f{};
             const double s2 = P.kernel.support2;
@@ -280,6 +282,10 @@ class SphStage final : public FluidStage {
                               });
             F.set(static_cast<std::int64_t>(gid[i] - g0), f);
           });
+      if (ex_) {
+        double* const comp[3] = {F.x, F.y, F.z};
+        for (double* c : comp) ex_->sum({c, static_cast<std::size_t>(nm_)});
+      }
       coupling_->apply(ddt);
     }
   }
@@ -521,7 +527,7 @@ class SphStage final : public FluidStage {
     const auto slot = slot_.cview();
     const std::int64_t nown = n_own_;
     return reduce_max(
-        Exec{}, nf_,
+        Exec{}, n_,  // fluid and markers (walls do not move)
         QDEMSPH_LAMBDA(std::int64_t i) { return slot[i] < nown ? norm(x[i] - x0[slot[i]]) : 0.0; },
         0.0);
   }
@@ -585,6 +591,7 @@ class SphStage final : public FluidStage {
                  const std::vector<std::uint64_t>& key) {
     n_ = n_own_ = static_cast<std::int64_t>(x.size());
     nf_ = std::count(type.begin(), type.end(), std::uint8_t{kSphFluid});
+    nml_ = std::count(type.begin(), type.end(), std::uint8_t{kSphSolid});
     x_.assign(x);
     v_.assign(v);
     rho_.assign(rho);
@@ -604,7 +611,9 @@ class SphStage final : public FluidStage {
 
   SphParams P_;
   std::int64_t n_global_ = 0, nf_global_ = 0;  // particles and fluid particles of all ranks
-  std::int64_t n_ = 0, nf_ = 0, nm_ = 0;       // this rank's, ghosts included
+  std::int64_t nm_ = 0;                        // markers of all ranks
+  std::int64_t n_ = 0, nf_ = 0;                // this rank's, ghosts included
+  std::int64_t nml_ = 0;                       // this rank's markers, ghosts included
   std::int64_t n_own_ = 0;                     // this rank's owned particles
   bool laid_out_ = false;   // distributed: the exchange's layout is this rank's particles
   double pending_dt_ = 0;   // time drifted since the last compute(): the density update's dt
