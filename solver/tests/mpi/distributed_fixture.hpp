@@ -5,12 +5,15 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "integrate/stepper.hpp"
 #include "io/scene_yaml.hpp"
 #include "model/model.hpp"
 #include "parallel/distributed_backend.hpp"
+#include "parallel/distributed_backend_mpi.hpp"
 
 namespace qdemsph::mpi_testing {
 
@@ -76,6 +79,25 @@ inline ParallelOptions options(long every, double threshold, const std::string& 
   o.rebalance_threshold = threshold;
   return o;
 }
+
+// A one-rank reference and the distributed run of the same model, stepped side by side.
+struct SideBySide {
+  std::unique_ptr<Backend> ref_be = make_host_backend();
+  std::unique_ptr<DistributedBackend> dist;
+  double dt;
+  Stepper ref, st;
+  SideBySide(const Model& m, const ParallelOptions& opt)
+      : dist(make_distributed_backend(MPI_COMM_WORLD, make_host_backend(), opt)),
+        dt(choose_dt(m, std::nullopt, 0.5)),
+        ref(uploaded(*ref_be, m), *ref_be, dt),
+        st(uploaded(*dist, m), *dist, dt) {}
+
+ private:
+  static const Model& uploaded(Backend& be, const Model& m) {  // before the Stepper sees it
+    be.upload(m);
+    return m;
+  }
+};
 
 inline double max_diff(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   double m = 0;

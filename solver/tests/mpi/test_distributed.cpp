@@ -70,12 +70,8 @@ struct Diff {
 
 Diff compare_runs(const Problem& r, const ParallelOptions& opt, int steps, int every,
                   bool check_ids = false) {
-  auto ref_be = make_host_backend();
-  ref_be->upload(r.model);
-  auto dist = make_distributed_backend(MPI_COMM_WORLD, make_host_backend(), opt);
-  dist->upload(r.model);
-  const double dt = choose_dt(r.model, std::nullopt, 0.5);
-  Stepper ref(r.model, *ref_be, dt), st(r.model, *dist, dt);
+  SideBySide s(r.model, opt);
+  auto& [ref_be, dist, dt, ref, st] = s;
   Diff d;
   std::int64_t seen = dist->rebuilds();
   for (int n = 1; n <= steps; ++n) {
@@ -143,12 +139,8 @@ TEST(Distributed, ContactRecordsEvaluatedOnce) {
   // summed over the ranks equal the one-rank counts at every step, across rebalancing
   // (history follows the evaluating rank), so no pair is evaluated twice and none is lost.
   const Problem r = load(kContactScene);
-  auto ref_be = make_host_backend();
-  ref_be->upload(r.model);
-  auto dist = make_distributed_backend(MPI_COMM_WORLD, make_host_backend(), options(25, 0.0));
-  dist->upload(r.model);
-  const double dt = choose_dt(r.model, std::nullopt, 0.5);
-  Stepper ref(r.model, *ref_be, dt), st(r.model, *dist, dt);
+  SideBySide s(r.model, options(25, 0.0));
+  auto& [ref_be, dist, dt, ref, st] = s;
   std::int64_t bad = 0, touching = 0;
   double pairs_ref = 0, pairs = 0;
   for (int n = 1; n <= 250; ++n) {
@@ -347,12 +339,8 @@ bodies: [{name: beam, material: m, mesh: {type: box, size: [0.5, 0.1, 0.1], cell
 constraints: [{type: fixed, body: beam, region: {x: [0, 0]}}]
 loads: [{type: traction, body: beam, region: {x: [0.5, 0.5]}, traction: [0, 0, -1.0e3]}]
 )");
-  auto ref_be = make_host_backend();
-  ref_be->upload(r.model);
-  auto dist = make_distributed_backend(MPI_COMM_WORLD, make_host_backend(), options(100, 0.1));
-  dist->upload(r.model);
-  const double dt = choose_dt(r.model, std::nullopt, 0.5);
-  Stepper ref(r.model, *ref_be, dt), st(r.model, *dist, dt);
+  SideBySide s(r.model, options(100, 0.1));
+  auto& [ref_be, dist, dt, ref, st] = s;
   const RelaxResult a = ref.relax(1e-7, 200000, false), b = st.relax(1e-7, 200000, false);
   EXPECT_TRUE(a.converged);
   EXPECT_TRUE(b.converged);
