@@ -118,13 +118,15 @@ class MpiFluidExchange final : public FluidExchange {
   }
   double skin() const override { return skin_; }
 
-  void refresh(std::span<const std::span<Vec3>> vec3,
-               std::span<const std::span<double>> scalar) override {
-    std::vector<CommField> f;
-    for (auto s : vec3) f.push_back(comm_field(s.data(), static_cast<std::int64_t>(s.size())));
-    for (auto s : scalar) f.push_back(comm_field(s.data(), static_cast<std::int64_t>(s.size())));
-    halo_->gather_begin(f);
-    halo_->gather_finish(f);
+  const std::vector<std::int64_t>& send_slots() const override {
+    return halo_->engine().send_index();
+  }
+  std::span<std::byte> send_buffer(std::size_t stride) override {
+    return halo_->engine().packed_send_buffer(stride);
+  }
+  std::span<const std::byte> refresh() override {
+    halo_->engine().begin_packed();
+    return halo_->engine().finish_packed();
   }
 
   void sum(std::span<double> v) override {

@@ -20,6 +20,7 @@
 // of such an order by the new cells is again one), so only distribute() needs the keys.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -51,10 +52,14 @@ class FluidExchange {
   virtual bool keep(double moved) = 0;
   // The ghost band's margin beyond the kernel support.
   virtual double skin() const = 0;
-  // Owned values -> ghost slots of the layout distribute() returned (fields of n_total
-  // items, owned first). Collective.
-  virtual void refresh(std::span<const std::span<Vec3>> vec3,
-                       std::span<const std::span<double>> scalar) = 0;
+  // Owned values -> ghost slots of the layout distribute() returned, in records the caller
+  // packs where its arrays live (a GPU stage on the device): fill send_buffer(stride) with
+  // one record of `stride` bytes per entry of send_slots() (owned layout slots; they stand
+  // until the next distribute()), then refresh() returns the records received in host
+  // memory, the k-th for the ghost in layout slot n_owned + k. Collective.
+  virtual const std::vector<std::int64_t>& send_slots() const = 0;
+  virtual std::span<std::byte> send_buffer(std::size_t stride) = 0;
+  virtual std::span<const std::byte> refresh() = 0;
   // Reductions over the ranks, the same result on every rank. Collective.
   virtual void sum(std::span<double> v) = 0;
   virtual void max(std::span<double> v) = 0;

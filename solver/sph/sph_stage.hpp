@@ -11,7 +11,8 @@
 // On several ranks (a FluidExchange) the particles are the rank's owned ones and ghosts within
 // one kernel support + skin; every loop skips ghosts, whose values come from their owners: x, v
 // at each compute() (all fields when the layout is rebuilt: fluid_exchange.hpp, keep()), rho,
-// p, m after the density and after the wall pressure pass.
+// p, m after the density and after the wall pressure pass; those refreshes pack and unpack
+// the ghost records where the arrays live (refresh_ghosts).
 // Wall particles are fixed; markers move with the bodies (sph/solid_coupling.hpp); the p and rho
 // of both come from the fluid by Adami extrapolation.
 //
@@ -23,7 +24,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <initializer_list>
 #include <memory>
 #include <numeric>
 #include <type_traits>
@@ -162,7 +162,7 @@ class SphStage final : public FluidStage {
     if (coupling_) coupling_->place(x_.view(), v_.view(), gid_.cview(), type_.cview(), n_, ddt);
     if (ex_) {
       if (laid_out_ && ex_->keep(moved()))
-        refresh_ghosts({&x_, &v_}, {});
+        refresh_positions();
       else
         redistribute();
     }
@@ -415,7 +415,8 @@ class SphStage final : public FluidStage {
     return x_.bytes() + v_.bytes() + a_.bytes() + rho_.bytes() + p_.bytes() + drho_.bytes() +
            pr_.bytes() + m_.bytes() + x0_.bytes() + type_.bytes() + gid_.bytes() + key_.bytes() +
            slot_.bytes() + tmp3_.bytes() + tmpd_.bytes() + tmpu_.bytes() + tmpt_.bytes() +
-           tmpi_.bytes() + keys_.bytes() + start_.bytes() + order_.bytes() + scratch_.bytes() +
+           tmpi_.bytes() + send_.bytes() + inv_.bytes() + pack_.bytes() + keys_.bytes() +
+           start_.bytes() + order_.bytes() + scratch_.bytes() +
            (coupling_ ? coupling_->bytes() : 0);
   }
 
@@ -500,6 +501,8 @@ class SphStage final : public FluidStage {
               in_order(q.gid), in_order(q.key));
     slot_.assign(ord);
     n_own_ = nown;
+    send_.assign(ex_->send_slots());
+    inv_.resize(n_);
     x0_.assign(std::vector<Vec3>(q.x.begin(), q.x.begin() + nown));
     laid_out_ = true;
     // The neighbour grid: the window of the whole box's cells that holds this rank's particles,
@@ -532,37 +535,65 @@ class SphStage final : public FluidStage {
         0.0);
   }
 
-  // Distributed: the ghosts' entries of the given buffers from their owners (through host
-  // copies in the exchange's layout, slot order).
-  void refresh_ghosts(std::initializer_list<Vec3Buffer*> vec3,
-                      std::initializer_list<Buffer<double>*> scalar) {
-    const auto slot = slot_.to_host();
-    auto to_layout = [&](const auto& h) {
-      std::remove_cvref_t<decltype(h)> s(h.size());
-      for (std::size_t i = 0; i < slot.size(); ++i) s[slot[i]] = h[i];
-      return s;
-    };
-    auto from_layout = [&](auto& b, auto& h, const auto& s) {
-      for (std::size_t i = 0; i < slot.size(); ++i)
-        if (slot[i] >= n_own_) h[i] = s[slot[i]];
-      b->assign(h);
-    };
-    std::vector<std::vector<Vec3>> hv, sv;
-    std::vector<std::vector<double>> hs, ss;
-    for (auto* b : vec3) hv.push_back(b->to_host()), sv.push_back(to_layout(hv.back()));
-    for (auto* b : scalar) hs.push_back(b->to_host()), ss.push_back(to_layout(hs.back()));
-    const std::vector<std::span<Vec3>> fv(sv.begin(), sv.end());
-    const std::vector<std::span<double>> fs(ss.begin(), ss.end());
-    ex_->refresh(fv, fs);
-    std::size_t k = 0;
-    for (auto* b : vec3) from_layout(b, hv[k], sv[k]), ++k;
-    k = 0;
-    for (auto* b : scalar) from_layout(b, hs[k], ss[k]), ++k;
+  // Component arrays of this rank's particles whose ghost entries a refresh sets.
+  struct GhostColumns {
+    static constexpr int kMax = 6;
+    double* c[kMax] = {};
+    int n = 0;
+    void add(Vec3View v) { c[n++] = v.x, c[n++] = v.y, c[n++] = v.z; }
+    void add(View<double> v) { c[n++] = v.p; }
+  };
+
+  // Distributed: the ghosts' entries of the given columns from their owners. Records (one
+  // double per column) are packed and unpacked where the arrays live; a GPU stage copies only
+  // the records between device and host.
+  void refresh_ghosts(const GhostColumns f) {
+    const std::int64_t ns = send_.size(), ng = n_ - n_own_, nown = n_own_;
+    const int w = f.n;
+    const auto slot = slot_.cview();
+    const auto inv = inv_.view();
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) { inv[slot[i]] = i; });
+    const auto at = inv_.cview();
+    const auto send = send_.cview();
+    const std::span<std::byte> out = ex_->send_buffer(w * sizeof(double));
+    double* pk = reinterpret_cast<double*>(out.data());
+    if constexpr (S != Space::Host) {
+      if (pack_.size() < w * std::max(ns, ng)) pack_.resize(w * std::max(ns, ng));
+      pk = pack_.view().p;
+    }
+    for_each(
+        Exec{}, ns, QDEMSPH_LAMBDA(std::int64_t k) {
+          const std::int64_t i = at[send[k]];
+          for (int c = 0; c < w; ++c) pk[w * k + c] = f.c[c][i];
+        });
+    if constexpr (S != Space::Host) space_copy(out.data(), Space::Host, pk, S, out.size());
+    const std::span<const std::byte> in = ex_->refresh();
+    const double* rv = reinterpret_cast<const double*>(in.data());
+    if constexpr (S != Space::Host) {
+      space_copy(pack_.view().p, S, in.data(), Space::Host, in.size());
+      rv = pack_.view().p;
+    }
+    for_each(
+        Exec{}, ng, QDEMSPH_LAMBDA(std::int64_t k) {
+          const std::int64_t i = at[nown + k];
+          for (int c = 0; c < w; ++c) f.c[c][i] = rv[w * k + c];
+        });
+  }
+  void refresh_positions() {
+    GhostColumns f;
+    f.add(x_.view());
+    f.add(v_.view());
+    refresh_ghosts(f);
   }
 
   // Distributed: rho, p, m of the ghosts from their owners; their p / rho^2 as the owners have it.
   void refresh_pressure() {
-    refresh_ghosts({}, {&rho_, &p_, &m_});
+    GhostColumns f;
+    f.add(rho_.view());
+    f.add(p_.view());
+    f.add(m_.view());
+    refresh_ghosts(f);
     const auto rho = rho_.cview(), p = p_.cview();
     const auto pr = pr_.view();
     const auto sl = slot_.cview();
@@ -625,8 +656,11 @@ class SphStage final : public FluidStage {
   Buffer<std::uint8_t> type_{S}, tmpt_{S};
   Buffer<std::uint64_t> gid_{S}, key_{S}, tmpu_{S};
   Buffer<std::int64_t> slot_{S}, tmpi_{S};
-  CellGrid grid_all_;  // the whole fluid box
-  CellGrid grid_;      // the cells searched: the whole box, or a rank's window of it
+  Buffer<std::int64_t> send_{S};  // distributed: the layout slots whose records go out
+  Buffer<std::int64_t> inv_{S};   // distributed: the particle in each layout slot (at a refresh)
+  Buffer<double> pack_{S};        // distributed, on a device: the records sent and received
+  CellGrid grid_all_;             // the whole fluid box
+  CellGrid grid_;                 // the cells searched: the whole box, or a rank's window of it
   Buffer<std::int64_t> keys_{S}, start_{S}, order_{S}, scratch_{S};
   std::unique_ptr<SolidCoupling<Exec>> coupling_;  // null without bodies
   std::unique_ptr<FluidExchange> ex_;              // null on one rank
