@@ -17,13 +17,53 @@ void* cuda_alloc(std::size_t) { no_cuda(); }
 void cuda_free(void*) noexcept {}
 void cuda_copy(void*, Space, const void*, Space, std::size_t) { no_cuda(); }
 void cuda_zero(void*, std::size_t) { no_cuda(); }
+void cuda_index_copy(void*, const void*, const std::int64_t*, std::int64_t, std::size_t, bool) {
+  no_cuda();
+}
 bool cuda_available() { return false; }
 #else
 void* cuda_alloc(std::size_t bytes);
 void cuda_free(void* p) noexcept;
 void cuda_copy(void* dst, Space ds, const void* src, Space ss, std::size_t bytes);
 void cuda_zero(void* p, std::size_t bytes);
+void cuda_index_copy(void* dst, const void* src, const std::int64_t* idx, std::int64_t n,
+                     std::size_t elem, bool scatter);
 #endif
+
+namespace {
+template <class T>
+void host_index_copy(void* dst, const void* src, const std::int64_t* idx, std::int64_t n,
+                     bool scatter) {
+  T* d = static_cast<T*>(dst);
+  const T* s = static_cast<const T*>(src);
+  for (std::int64_t k = 0; k < n; ++k) {
+    if (scatter)
+      d[idx[k]] = s[k];
+    else
+      d[k] = s[idx[k]];
+  }
+}
+
+void index_copy(Space sp, void* dst, const void* src, const std::int64_t* idx, std::int64_t n,
+                std::size_t elem, bool scatter) {
+  if (elem != 1 && elem != 4 && elem != 8)
+    throw std::logic_error("space_gather/space_scatter: elements of 1, 4 or 8 bytes");
+  if (n <= 0) return;
+  if (sp == Space::Cuda) return cuda_index_copy(dst, src, idx, n, elem, scatter);
+  if (elem == 1) return host_index_copy<std::uint8_t>(dst, src, idx, n, scatter);
+  if (elem == 4) return host_index_copy<std::uint32_t>(dst, src, idx, n, scatter);
+  host_index_copy<std::uint64_t>(dst, src, idx, n, scatter);
+}
+}  // namespace
+
+void space_gather(Space s, void* dst, const void* src, const std::int64_t* idx, std::int64_t n,
+                  std::size_t elem) {
+  index_copy(s, dst, src, idx, n, elem, false);
+}
+void space_scatter(Space s, void* dst, const std::int64_t* idx, const void* src, std::int64_t n,
+                   std::size_t elem) {
+  index_copy(s, dst, src, idx, n, elem, true);
+}
 
 void* space_alloc(Space s, std::size_t bytes) {
   if (s == Space::Cuda) return cuda_alloc(bytes);

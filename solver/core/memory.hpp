@@ -22,6 +22,12 @@ void* space_alloc(Space s, std::size_t bytes);
 void space_free(Space s, void* p) noexcept;
 void space_copy(void* dst, Space dst_space, const void* src, Space src_space, std::size_t bytes);
 void space_zero(Space s, void* p, std::size_t bytes);
+// Indexed copies within one space (all pointers in it): gather dst[k] = src[idx[k]] and
+// scatter dst[idx[k]] = src[k], k < n, for elements of `elem` bytes (1, 4 or 8).
+void space_gather(Space s, void* dst, const void* src, const std::int64_t* idx, std::int64_t n,
+                  std::size_t elem);
+void space_scatter(Space s, void* dst, const std::int64_t* idx, const void* src, std::int64_t n,
+                   std::size_t elem);
 bool cuda_available();
 
 template <class T>

@@ -77,6 +77,29 @@ void cuda_zero(void* p, std::size_t bytes) {
   QDEMSPH_CUDA_CHECK(cudaMemset(p, 0, bytes), "cudaMemset");
 }
 
+template <class T>
+void cuda_index_copy_t(void* dst, const void* src, const std::int64_t* idx, std::int64_t n,
+                       bool scatter) {
+  T* d = static_cast<T*>(dst);
+  const T* s = static_cast<const T*>(src);
+  if (scatter)
+    for_each(
+        CudaExec{}, n, QDEMSPH_LAMBDA(std::int64_t k) { d[idx[k]] = s[k]; });
+  else
+    for_each(
+        CudaExec{}, n, QDEMSPH_LAMBDA(std::int64_t k) { d[k] = s[idx[k]]; });
+}
+
+void cuda_index_copy(void* dst, const void* src, const std::int64_t* idx, std::int64_t n,
+                     std::size_t elem, bool scatter) {
+  if (elem == 1)
+    cuda_index_copy_t<unsigned char>(dst, src, idx, n, scatter);
+  else if (elem == 4)
+    cuda_index_copy_t<unsigned int>(dst, src, idx, n, scatter);
+  else
+    cuda_index_copy_t<unsigned long long>(dst, src, idx, n, scatter);
+}
+
 int cuda_grid_cap() {
   static const int cap = [] {
     int dev = 0, sms = 0;

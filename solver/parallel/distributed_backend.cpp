@@ -378,27 +378,29 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
 
   // ---- fluid coupling (sph/solid_coupling.hpp) ---------------------------------------------
   // The coupling reads and writes whole-model arrays by global vertex id, the same on every
-  // rank: pull() gives it the x, v of every coupled vertex (the owners' values, one allgather;
-  // fixed bodies do not move) and the f, inv_mass, held of this rank's owned ones (others:
-  // inv_mass 0, so it leaves their v alone); since every rank gathers the same fluid force on
-  // every coupled vertex (the stage sums the marker forces over the ranks), fc here is every
-  // coupled vertex's, and push() (and each rebuild) gives the owned ones theirs. Host memory:
-  // a CUDA rank's coupling is refused.
+  // rank, in the local backend's memory space: pull() gives it the x, v of every coupled vertex
+  // (the owners' values, one allgather through host memory; fixed bodies do not move) and the
+  // f, inv_mass, held of this rank's owned ones (others: inv_mass 0, so it leaves their v
+  // alone); since every rank gathers the same fluid force on every coupled vertex (the stage
+  // sums the marker forces over the ranks), fc here is every coupled vertex's, and push() (and
+  // each rebuild) gives the owned ones theirs. Between the local and the whole-model arrays
+  // values move by indexed copies where they live (space_gather / space_scatter).
   SolidViews solid_views() override {
-    if (local_->solid_views().space != Space::Host)
-      throw InputError(
-          "fluid.couple_bodies: a coupled fluid on several MPI ranks runs on the cpu backend "
-          "only so far (docs/parallel.md)");
     const Model& g = *g_;
+    cspace_ = local_->solid_views().space;
+    cx_ = Vec3Buffer(cspace_), cv_ = Vec3Buffer(cspace_), cf_ = Vec3Buffer(cspace_),
+    cfc_ = Vec3Buffer(cspace_);
+    cinv_ = Buffer<double>(cspace_), cheld_ = Buffer<std::uint8_t>(cspace_);
     cx_.assign(g.x);
     cv_.assign(g.v);
-    cf_.assign(std::vector<Vec3>(g.n_vertices()));
-    cfc_.assign(std::vector<Vec3>(g.n_vertices()));
-    cinv_.assign(std::vector<double>(g.n_vertices(), 0.0));
-    cheld_.assign(std::vector<std::uint8_t>(g.n_vertices(), 0));
+    cf_.resize(g.n_vertices());
+    cfc_.resize(g.n_vertices());
+    cinv_.resize(g.n_vertices());
+    cheld_.resize(g.n_vertices());
     coupled_ = true;
     install_coupling();
     SolidViews s;
+    s.space = cspace_;
     s.x = cx_.cview();
     s.v = cv_.view();
     s.f = cf_.view();
@@ -413,39 +415,69 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     if (is_coupled_.empty()) {
       is_coupled_.assign(g_->n_vertices(), 0);
       for (auto v : coupled) is_coupled_[v] = 1;
+      const std::int64_t nc = static_cast<std::int64_t>(coupled.size());
+      all_gid_ = Buffer<std::int64_t>(cspace_);
+      all_gid_.assign(std::vector<std::int64_t>(coupled.begin(), coupled.end()));
+      zeros_ = Buffer<double>(cspace_, nc);
+      stage_ = Buffer<double>(cspace_, 6 * nc);
+      stage_idx_ = Buffer<std::int64_t>(cspace_, nc);
+      index_coupled();
     }
+    const SolidViews& l = local_sv_;
+    const std::int64_t n = static_cast<std::int64_t>(own_gid_h_.size());
+    double* st = stage_.view().p;
+    // x, v of the owned coupled vertices to every rank.
+    const double* comp[6] = {l.x.x, l.x.y, l.x.z, l.v.x, l.v.y, l.v.z};
+    for (int c = 0; c < 6; ++c)
+      space_gather(cspace_, st + c * n, comp[c], own_local_.cview().p, n, 8);
+    std::vector<double> h(6 * n);
+    if (n > 0) space_copy(h.data(), Space::Host, st, cspace_, h.size() * sizeof(double));
     struct Moved {
       std::int64_t gid;
-      Vec3 x, v;
+      double c[6];
     };
-    std::vector<Moved> mine;
-    const SolidViews& l = local_sv_;
-    for (std::int64_t i = 0; i < L_.n_owned; ++i)
-      if (is_coupled_[L_.vertices[i]]) mine.push_back({L_.vertices[i], l.x[i], l.v[i]});
-    const auto x = cx_.view(), v = cv_.view(), f = cf_.view();
-    const auto inv = cinv_.view();
-    const auto held = cheld_.view();
-    for (const Moved& m : allgatherv(comm_, mine)) x.set(m.gid, m.x), v.set(m.gid, m.v);
-    for (auto c : coupled) inv[c] = 0.0;
-    for (std::int64_t i = 0; i < L_.n_owned; ++i) {
-      const std::int64_t gid = L_.vertices[i];
-      if (!is_coupled_[gid]) continue;
-      f.set(gid, l.f[i]);
-      inv[gid] = l.inv_mass[i];
-      held[gid] = l.held[i];
+    std::vector<Moved> mine(n);
+    for (std::int64_t k = 0; k < n; ++k) {
+      mine[k].gid = own_gid_h_[k];
+      for (int c = 0; c < 6; ++c) mine[k].c[c] = h[c * n + k];
     }
+    const std::vector<Moved> all = allgatherv(comm_, mine);
+    const std::int64_t m = static_cast<std::int64_t>(all.size());
+    std::vector<std::int64_t> gid(m);
+    h.assign(6 * m, 0.0);
+    for (std::int64_t k = 0; k < m; ++k) {
+      gid[k] = all[k].gid;
+      for (int c = 0; c < 6; ++c) h[c * m + k] = all[k].c[c];
+    }
+    if (m > 0) {
+      space_copy(stage_idx_.view().p, cspace_, gid.data(), Space::Host, m * sizeof(std::int64_t));
+      space_copy(st, cspace_, h.data(), Space::Host, h.size() * sizeof(double));
+    }
+    const Vec3View x = cx_.view(), v = cv_.view();
+    double* whole[6] = {x.x, x.y, x.z, v.x, v.y, v.z};
+    for (int c = 0; c < 6; ++c)
+      space_scatter(cspace_, whole[c], stage_idx_.cview().p, st + c * m, m, 8);
+    // f, inv_mass, held of the owned ones (inv_mass 0 for the others).
+    space_scatter(cspace_, cinv_.view().p, all_gid_.cview().p, zeros_.cview().p, all_gid_.size(),
+                  8);
+    const Vec3View f = cf_.view();
+    copy_coupled(f.x, l.f.x, n, 8, true);
+    copy_coupled(f.y, l.f.y, n, 8, true);
+    copy_coupled(f.z, l.f.z, n, 8, true);
+    copy_coupled(cinv_.view().p, l.inv_mass.p, n, 8, true);
+    copy_coupled(cheld_.view().p, l.held.p, n, 1, true);
   }
 
   void push(std::span<const std::int32_t>) override {
     const SolidViews& l = local_sv_;
-    const auto v = cv_.cview(), f = cf_.cview(), fc = cfc_.cview();
-    for (std::int64_t i = 0; i < L_.n_owned; ++i) {
-      const std::int64_t gid = L_.vertices[i];
-      if (!is_coupled_[gid]) continue;
-      l.v.set(i, v[gid]);
-      l.f.set(i, f[gid]);
-      l.fc.set(i, fc[gid]);
-    }
+    const std::int64_t n = static_cast<std::int64_t>(own_gid_h_.size());
+    const Vec3View v = cv_.view(), f = cf_.view(), fc = cfc_.view();
+    copy_coupled(l.v.x, v.x, n, 8, false), copy_coupled(l.v.y, v.y, n, 8, false);
+    copy_coupled(l.v.z, v.z, n, 8, false);
+    copy_coupled(l.f.x, f.x, n, 8, false), copy_coupled(l.f.y, f.y, n, 8, false);
+    copy_coupled(l.f.z, f.z, n, 8, false);
+    copy_coupled(l.fc.x, fc.x, n, 8, false), copy_coupled(l.fc.y, fc.y, n, 8, false);
+    copy_coupled(l.fc.z, fc.z, n, 8, false);
   }
 
   // ---- records and the checkpoint hook -----------------------------------------------------
@@ -1097,9 +1129,34 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   void install_coupling() {
     local_sv_ = local_->solid_views();
     if (is_coupled_.empty()) return;  // nothing coupled yet: fc is zero
-    const auto fc = cfc_.cview();
+    index_coupled();
+    const std::int64_t n = static_cast<std::int64_t>(own_gid_h_.size());
+    const Vec3View fc = cfc_.view();
+    copy_coupled(local_sv_.fc.x, fc.x, n, 8, false);
+    copy_coupled(local_sv_.fc.y, fc.y, n, 8, false);
+    copy_coupled(local_sv_.fc.z, fc.z, n, 8, false);
+  }
+
+  // The owned coupled vertices of the layout: local and global ids.
+  void index_coupled() {
+    std::vector<std::int64_t> loc;
+    own_gid_h_.clear();
     for (std::int64_t i = 0; i < L_.n_owned; ++i)
-      if (is_coupled_[L_.vertices[i]]) local_sv_.fc.set(i, fc[L_.vertices[i]]);
+      if (is_coupled_[L_.vertices[i]]) loc.push_back(i), own_gid_h_.push_back(L_.vertices[i]);
+    own_local_ = Buffer<std::int64_t>(cspace_);
+    own_gid_ = Buffer<std::int64_t>(cspace_);
+    own_local_.assign(loc);
+    own_gid_.assign(own_gid_h_);
+  }
+
+  // One field of the n owned coupled vertices between the whole-model array (by global id)
+  // and the local one (by local id), through the staging buffer: to_whole, local -> whole.
+  void copy_coupled(void* dst, const void* src, std::int64_t n, std::size_t elem, bool to_whole) {
+    void* st = stage_.view().p;
+    const std::int64_t* from = (to_whole ? own_local_ : own_gid_).cview().p;
+    const std::int64_t* to = (to_whole ? own_gid_ : own_local_).cview().p;
+    space_gather(cspace_, st, src, from, n, elem);
+    space_scatter(cspace_, dst, to, st, n, elem);
   }
 
   MPI_Comm comm_ = MPI_COMM_NULL;
@@ -1131,13 +1188,20 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   bool pending_after_ = false;
   std::vector<RebalanceEntry> log_;
   std::int64_t migrated_bytes_ = 0, halo_bytes_ = 0, exchanges_ = 0;
-  // Fluid coupling: whole-model arrays by global vertex id (solid_views()).
+  // Fluid coupling: whole-model arrays by global vertex id (solid_views()), in the local
+  // backend's space, and what moves values between them and the local arrays.
   bool coupled_ = false;
+  Space cspace_ = Space::Host;
   SolidViews local_sv_;                   // the local backend's, local ids
   std::vector<std::uint8_t> is_coupled_;  // per global vertex: carries fluid markers
-  Vec3Buffer cx_{Space::Host}, cv_{Space::Host}, cf_{Space::Host}, cfc_{Space::Host};
-  Buffer<double> cinv_{Space::Host};
-  Buffer<std::uint8_t> cheld_{Space::Host};
+  Vec3Buffer cx_, cv_, cf_, cfc_;
+  Buffer<double> cinv_;
+  Buffer<std::uint8_t> cheld_;
+  std::vector<std::int64_t> own_gid_h_;       // the owned coupled vertices' global ids
+  Buffer<std::int64_t> own_local_, own_gid_;  // ... their local and global ids (cspace_)
+  Buffer<std::int64_t> all_gid_;              // every coupled vertex
+  Buffer<double> zeros_, stage_;              // staging: 6 doubles per coupled vertex
+  Buffer<std::int64_t> stage_idx_;
 };
 
 }  // namespace

@@ -1,0 +1,51 @@
+// Indexed copies within a memory space (core/memory.hpp): known answers on the host, the same
+// on a device (skipped without a GPU).
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <stdexcept>
+#include <vector>
+
+#include "core/memory.hpp"
+
+namespace qdemsph {
+namespace {
+
+// gather then scatter of doubles and bytes through buffers of space s; returns the results.
+struct Copied {
+  std::vector<double> gathered, scattered;
+  std::vector<std::uint8_t> bytes;
+};
+Copied copy_in(Space s) {
+  const std::vector<double> src = {10, 11, 12, 13, 14, 15};
+  const std::vector<std::int64_t> idx = {5, 0, 3};
+  Buffer<double> a(s), g(s, 3), d(s, 6);
+  Buffer<std::int64_t> i(s);
+  a.assign(src);
+  i.assign(idx);
+  space_gather(s, g.view().p, a.cview().p, i.cview().p, 3, 8);
+  space_scatter(s, d.view().p, i.cview().p, g.cview().p, 3, 8);
+  Buffer<std::uint8_t> b(s), bd(s, 6);
+  b.assign({1, 2, 3});
+  space_scatter(s, bd.view().p, i.cview().p, b.cview().p, 3, 1);
+  return {g.to_host(), d.to_host(), bd.to_host()};
+}
+
+TEST(Memory, GatherAndScatterByIndex) {
+  const Copied c = copy_in(Space::Host);
+  EXPECT_EQ(c.gathered, (std::vector<double>{15, 10, 13}));
+  EXPECT_EQ(c.scattered, (std::vector<double>{10, 0, 0, 13, 0, 15}));
+  EXPECT_EQ(c.bytes, (std::vector<std::uint8_t>{2, 0, 0, 3, 0, 1}));
+  EXPECT_THROW(space_gather(Space::Host, nullptr, nullptr, nullptr, 1, 2), std::logic_error);
+}
+
+TEST(Memory, GatherAndScatterOnTheDeviceMatchTheHost) {
+  if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
+  const Copied h = copy_in(Space::Host), d = copy_in(Space::Cuda);
+  EXPECT_EQ(d.gathered, h.gathered);
+  EXPECT_EQ(d.scattered, h.scattered);
+  EXPECT_EQ(d.bytes, h.bytes);
+}
+
+}  // namespace
+}  // namespace qdemsph
