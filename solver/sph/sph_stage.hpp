@@ -24,6 +24,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <memory>
 #include <numeric>
 #include <type_traits>
@@ -283,8 +284,15 @@ class SphStage final : public FluidStage {
             F.set(static_cast<std::int64_t>(gid[i] - g0), f);
           });
       if (ex_) {
+        // Each marker's force comes from the rank that owns it (the others hold zero).
+        const std::size_t bytes = nm_ * sizeof(double);
+        std::vector<double> h(nm_);
         double* const comp[3] = {F.x, F.y, F.z};
-        for (double* c : comp) ex_->sum({c, static_cast<std::size_t>(nm_)});
+        for (double* c : comp) {
+          space_copy(h.data(), Space::Host, c, S, bytes);
+          ex_->sum(h);
+          space_copy(c, S, h.data(), Space::Host, bytes);
+        }
       }
       coupling_->apply(ddt);
     }
