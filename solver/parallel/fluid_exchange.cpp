@@ -45,6 +45,9 @@ class MpiFluidExchange final : public FluidExchange {
   }
 
   std::int64_t distribute(FluidParticles& p) override {
+    if (!after_keep_) ++evaluations_;  // else keep() counted this evaluation
+    after_keep_ = false;
+    ++rebuilds_;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
     std::vector<double> cost(n);
     for (std::int64_t i = 0; i < n; ++i) cost[i] = p.type[i] == kSphFluid ? 1.0 : kFluidWallCost;
@@ -59,6 +62,7 @@ class MpiFluidExchange final : public FluidExchange {
     resize(o, mp.n_new());
     mp.begin(fields_of(p));
     mp.finish(fields_of(o));
+    migrated_bytes_ += mp.engine().last_bytes();
     const std::int64_t nown = mp.n_new();
     load_ = 0;
     for (std::int64_t i = 0; i < nown; ++i) load_ += o.type[i] == kSphFluid ? 1.0 : kFluidWallCost;
@@ -75,7 +79,7 @@ class MpiFluidExchange final : public FluidExchange {
     for (auto c : mine)
       if (!interior(c)) pub.push_back({c, me_});
     std::unordered_map<std::uint64_t, std::vector<int>> occupied;  // cell -> other ranks
-    for (const auto& [c, r] : allgatherv(comm_, pub))
+    for (const auto& [c, r] : allgatherv(comm_, pub, &band_bytes_))
       if (r != me_) occupied[c].push_back(static_cast<int>(r));
     std::unordered_map<std::uint64_t, std::vector<int>> near;  // cell -> ranks within the band
     std::vector<std::int64_t> off{0};
@@ -103,18 +107,22 @@ class MpiFluidExchange final : public FluidExchange {
     const auto f = fields_of(o);
     halo_->gather_begin(f);
     halo_->gather_finish(f);
+    halo_bytes_ += halo_->engine().last_bytes();
     p = std::move(o);
     return nown;
   }
 
   bool keep(double moved) override {
     ++steps_;
+    ++evaluations_;
     if (rebalance_due()) {
       rebalance_ = true;
-      return false;
+    } else {
+      MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_DOUBLE, MPI_MAX, comm_);
+      if (moved <= skin_ / 2) return true;
     }
-    MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_DOUBLE, MPI_MAX, comm_);
-    return moved <= skin_ / 2;
+    after_keep_ = true;
+    return false;
   }
   double skin() const override { return skin_; }
 
@@ -125,6 +133,7 @@ class MpiFluidExchange final : public FluidExchange {
     for (auto s : scalar) f.push_back(comm_field(s.data(), static_cast<std::int64_t>(s.size())));
     halo_->gather_begin(f);
     halo_->gather_finish(f);
+    halo_bytes_ += halo_->engine().last_bytes();
   }
 
   void sum(std::span<double> v) override {
@@ -143,6 +152,11 @@ class MpiFluidExchange final : public FluidExchange {
   }
   int rank() const override { return me_; }
   int size() const override { return np_; }
+  FluidTraffic traffic() override {
+    std::int64_t b[3] = {halo_bytes_, migrated_bytes_, band_bytes_};
+    MPI_Allreduce(MPI_IN_PLACE, b, 3, MPI_INT64_T, MPI_SUM, comm_);
+    return {evaluations_, rebuilds_, b[0], b[1], b[2]};
+  }
 
  private:
   std::uint64_t cell_key(Vec3 p) const {
@@ -212,6 +226,11 @@ class MpiFluidExchange final : public FluidExchange {
   long steps_ = 0;   // keep() calls
   double load_ = 0;  // owned cost at the last distribute() (the owned set stands until the next)
   bool rebalance_ = false;  // the next distribute() cuts the partition again
+  // Traffic (this rank's bytes sent): evaluations counts keep() calls and the distribute()
+  // calls no keep() asked for (the first, and the one after a load_state).
+  bool after_keep_ = false;  // the next distribute() is the one a keep() asked for
+  std::int64_t evaluations_ = 0, rebuilds_ = 0;
+  std::int64_t halo_bytes_ = 0, migrated_bytes_ = 0, band_bytes_ = 0;
   Decomposition dec_;
   std::unique_ptr<HaloPlan> halo_;
 };

@@ -12,7 +12,9 @@
 //    is the one-rank file); restarting N ranks from a one-rank state continues exactly;
 //  - a dam break coupled to a free cube (markers in the fluid's exchange, every marker's force
 //    summed over the ranks and gathered to the cube's vertices in the one-rank order) equals
-//    one rank bit for bit.
+//    one rank bit for bit;
+//  - the exchange's traffic (summary.json `parallel`: fluid_halo_bytes_per_step,
+//    fluid_migrated_bytes) is what its plans send: ghosts x bytes per ghost x refreshes.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -24,6 +26,7 @@
 #include "distributed_fixture.hpp"
 #include "integrate/stepper.hpp"
 #include "parallel/fluid_exchange.hpp"
+#include "parallel/parallel_record.hpp"
 #include "sph/fluid_setup.hpp"
 #include "sph/fluid_stage.hpp"
 
@@ -279,4 +282,96 @@ TEST(DistributedFluid, CoupledDamBreakWithCubeEqualsOneRankBitForBit) {
     EXPECT_GT(moved, 1e-3);
     if (size_of() > 1) EXPECT_GT(rebalances, 0);
   }
+}
+
+// The traffic of one layout: each rank's contiguous share of the dam break distributed (the
+// particles migrate, the ghosts are filled with every travelling field: x, v, rho, m, type,
+// gid, key), then kRefreshes steps' refreshes as the stage does them (x, v; then rho, p, m
+// twice). The counts come from what the layout holds: a rank's ghosts, its owned particles
+// from other ranks' shares.
+TEST(DistributedFluid, TrafficIsWhatThePlansSend) {
+  const FluidSetup f = dam_setup();
+  const int me = rank_of(), np = size_of();
+  auto ex = make_fluid_exchange(options(50, 0.0), f.params.kernel.support());
+  const std::int64_t n = f.size(), b = n * me / np, e = n * (me + 1) / np;
+  FluidParticles p;
+  for (std::int64_t i = b; i < e; ++i) {
+    p.x.push_back(f.x[i]), p.v.push_back(f.v[i]), p.rho.push_back(f.rho[i]);
+    p.m.push_back(f.m[i]), p.type.push_back(f.type[i]), p.gid.push_back(f.gid[i]);
+    p.key.push_back(f.gid[i]);
+  }
+  const std::vector<std::uint64_t> share(p.gid.begin(), p.gid.end());
+  const std::int64_t nown = ex->distribute(p);
+  std::int64_t count[2] = {static_cast<std::int64_t>(p.size()) - nown, 0};  // ghosts, arrived
+  for (std::int64_t i = 0; i < nown; ++i)
+    count[1] += std::find(share.begin(), share.end(), p.gid[i]) == share.end();
+  MPI_Allreduce(MPI_IN_PLACE, count, 2, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+  constexpr int kRefreshes = 5;
+  std::vector<double> pressure(p.size(), 1.0);
+  for (int k = 0; k < kRefreshes; ++k) {
+    const std::span<Vec3> xv[2] = {p.x, p.v};
+    const std::span<double> rpm[3] = {p.rho, pressure, p.m};
+    ex->refresh(xv, {});
+    ex->refresh({}, rpm);
+    ex->refresh({}, rpm);
+  }
+  const FluidTraffic t = ex->traffic();
+  constexpr std::int64_t kRecord = 2 * sizeof(Vec3) + 2 * sizeof(double) + sizeof(std::uint8_t) +
+                                   2 * sizeof(std::uint64_t);  // 81: the fields that travel
+  constexpr std::int64_t kStep = 2 * sizeof(Vec3) + 2 * 3 * sizeof(double);  // 96
+  const std::int64_t want_halo = count[0] * (kRecord + kRefreshes * kStep);
+  EXPECT_EQ(t.evaluations, 1);
+  EXPECT_EQ(t.rebuilds, 1);
+  EXPECT_EQ(t.halo_bytes, want_halo);
+  EXPECT_EQ(t.migrated_bytes, count[1] * kRecord);
+  ParallelRecord r;
+  r.set_fluid(t);
+  EXPECT_EQ(r.fluid_halo_bytes_per_step, static_cast<double>(want_halo));
+  EXPECT_EQ(r.fluid_migrated_bytes, t.migrated_bytes + t.band_bytes);
+  if (np == 1) {
+    EXPECT_EQ(t.halo_bytes, 0);
+    EXPECT_EQ(t.migrated_bytes + t.band_bytes, 0);
+  } else {
+    EXPECT_GT(count[0], 0);
+    EXPECT_GT(count[1], 0);
+    EXPECT_GT(t.band_bytes, 0);  // (cell key, rank) pairs, each sent to the other ranks
+    EXPECT_EQ(t.band_bytes % (16 * (np - 1)), 0);
+  }
+  if (me == 0)
+    std::printf(
+        "[fluid traffic, %d ranks] %ld ghosts, %ld particles migrated: halo %ld B (%ld x (%ld + "
+        "%d x %ld)), migration %ld B, band cells %ld B\n",
+        np, static_cast<long>(count[0]), static_cast<long>(count[1]),
+        static_cast<long>(t.halo_bytes), static_cast<long>(count[0]), static_cast<long>(kRecord),
+        kRefreshes, static_cast<long>(kStep), static_cast<long>(t.migrated_bytes),
+        static_cast<long>(t.band_bytes));
+}
+
+// The stage's traffic over a run: one evaluation per compute() (the constructor's and one
+// per step), rebuilds by the skin rule and the cuts, and on one rank nothing sent.
+TEST(DistributedFluid, StageTrafficPerEvaluation) {
+  const FluidSetup f = dam_setup();
+  auto ex = make_fluid_exchange(options(50, 0.0), f.params.kernel.support());
+  FluidExchange* x = ex.get();
+  auto dist = make_fluid_stage("cpu", f, nullptr, std::move(ex));
+  constexpr int kSteps = 120;
+  for (int n = 0; n < kSteps; ++n) step(*dist);
+  const FluidTraffic t = x->traffic();
+  ParallelRecord r;
+  r.set_fluid(t);
+  EXPECT_EQ(t.evaluations, kSteps + 1);
+  EXPECT_GE(t.rebuilds, 1);  // the first layout, then the skin rule and the cuts
+  if (size_of() == 1) {
+    EXPECT_EQ(r.fluid_halo_bytes_per_step, 0.0);
+    EXPECT_EQ(r.fluid_migrated_bytes, 0);
+  } else {
+    EXPECT_GT(r.fluid_halo_bytes_per_step, 0.0);
+    EXPECT_GT(r.fluid_migrated_bytes, 0);
+  }
+  if (rank_of() == 0)
+    std::printf(
+        "[fluid stage traffic, %d ranks, %d steps] %ld rebuilds, halo %.0f B per evaluation, "
+        "migrated %ld B\n",
+        size_of(), kSteps, static_cast<long>(t.rebuilds), r.fluid_halo_bytes_per_step,
+        static_cast<long>(r.fluid_migrated_bytes));
 }
