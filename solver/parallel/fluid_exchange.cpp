@@ -8,6 +8,7 @@
 #include "parallel/band_cells.hpp"
 #include "parallel/collectives.hpp"
 #include "parallel/comm_plan.hpp"
+#include "parallel/distributed_backend_mpi.hpp"
 #include "sph/fluid_setup.hpp"
 
 namespace qdemsph {
@@ -237,8 +238,13 @@ class MpiFluidExchange final : public FluidExchange {
 
 }  // namespace
 
+std::unique_ptr<FluidExchange> make_fluid_exchange(MPI_Comm comm, const ParallelOptions& options,
+                                                   double support) {
+  return std::make_unique<MpiFluidExchange>(comm, options, support);
+}
+
 std::unique_ptr<FluidExchange> make_fluid_exchange(const ParallelOptions& options, double support) {
-  return std::make_unique<MpiFluidExchange>(MPI_COMM_WORLD, options, support);
+  return make_fluid_exchange(MPI_COMM_WORLD, options, support);
 }
 
 }  // namespace qdemsph

@@ -191,51 +191,21 @@ TEST(DistributedFluid, RestartFromOneRankStateContinuesExactly) {
   }
 }
 
-// A dam break against a free deformable cube resting on a contact wall (the floor), coupled
-// both ways, the solid stepped twice per fluid step (the coupling force held over the
-// sub-steps): the Stepper over a DistributedBackend with a distributed fluid against one
-// rank's, both partitions cut again every 25 steps (threshold 0).
-const char* kCoupledScene = R"(
-run: {end_time: 0.1}
-gravity: [0, 0, -9.81]
-materials: {m: {E: 1.0e6, nu: 0.3, density: 500, viscosity: 5}}
-contact: {mu: 0.4, d_dem: 0.004}
-walls: [{point: [0, 0, 0], normal: [0, 0, 1]}]
-bodies:
-  - {name: cube, material: m, mesh: {type: box, origin: [0.23, 0.02, 0.002], size: [0.08, 0.08, 0.08], cells: [2, 2, 2]}}
-fluid:
-  spacing: 0.02
-  couple_bodies: true
-  blocks: [{min: [0, 0, 0], max: [0.2, 0.12, 0.2]}]
-  tanks: [{min: [0, 0, 0], max: [0.5, 0.12, 0.3], thickness_layers: 2}]
-)";
-
+// The coupled scene (distributed_fixture.hpp, CoupledRun): the Stepper over a DistributedBackend
+// with a distributed fluid against one rank's, both partitions cut again every 25 steps.
 TEST(DistributedFluid, CoupledDamBreakWithCubeEqualsOneRankBitForBit) {
   const Problem r = load(kCoupledScene);
-  FluidSetup f = build_fluid(r.scene.fluid, r.scene.gravity);
-  add_solid_markers(f, r.model);
+  const FluidSetup f = coupled_fluid(r);
   ASSERT_GT(f.n_marker, 0);
-  constexpr int kSubsteps = 2;
   const bool root = rank_of() == 0;
-  std::unique_ptr<Backend> ref_be;
-  std::unique_ptr<FluidStage> ref_fluid;
-  std::unique_ptr<Stepper> ref;
-  SolidViews ref_solid;
-  if (root) {
-    ref_be = make_host_backend();
-    ref_be->upload(r.model);
-    ref_solid = ref_be->solid_views();
-    ref_fluid = make_fluid_stage("cpu", f, &ref_solid);
-    ref = std::make_unique<Stepper>(r.model, *ref_be, kH);
-    ref->attach_fluid(ref_fluid.get(), kSubsteps);
-  }
-  auto be = make_distributed_backend(make_host_backend(), options(25, 0.0));
-  be->upload(r.model);
-  const SolidViews solid = be->solid_views();
-  auto fluid = make_fluid_stage("cpu", f, &solid,
-                                make_fluid_exchange(options(25, 0.0), f.params.kernel.support()));
-  Stepper st(r.model, *be, kH);
-  st.attach_fluid(fluid.get(), kSubsteps);
+  std::unique_ptr<CoupledRun> one = root ? std::make_unique<CoupledRun>(r.model, f) : nullptr;
+  CoupledRun many(r.model, f, MPI_COMM_WORLD);
+  Backend* ref_be = one ? one->be.get() : nullptr;
+  FluidStage* ref_fluid = one ? one->fluid.get() : nullptr;
+  Stepper* ref = one ? one->st.get() : nullptr;
+  Backend* be = many.be.get();
+  FluidStage* fluid = many.fluid.get();
+  Stepper& st = *many.st;
   constexpr int kSteps = 400;
   StateDiff worst;
   double dx = 0, dv = 0, force = 0;
@@ -259,7 +229,7 @@ TEST(DistributedFluid, CoupledDamBreakWithCubeEqualsOneRankBitForBit) {
     dv = std::max(dv, max_diff(ha.v, hb.v));
     force = std::max(force, norm(ref_fluid->stats().force_on_bodies - fb));
   }
-  const std::int64_t rebalances = be->rebalances();
+  const std::int64_t rebalances = many.dist->rebalances();
   if (root) {
     std::printf(
         "[coupled dam break, %d ranks, %ld particles (%ld markers), %d steps] fluid max |dx| = "
