@@ -197,9 +197,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     // Under mpirun the particles are distributed too (parallel/fluid_exchange.hpp).
     std::unique_ptr<FluidExchange> exchange;
 #ifdef QDEMSPH_HAVE_MPI
-    if (distributed)
-      exchange = make_fluid_exchange(parallel_options(scene.parallel),
-                                     fluid_setup->params.kernel.support());
+    if (distributed) exchange = make_fluid_exchange(parallel_options(scene.parallel), *fluid_setup);
     fluid_exchange = exchange.get();
 #endif
     SolidViews solid;

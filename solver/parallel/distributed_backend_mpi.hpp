@@ -14,6 +14,6 @@ std::unique_ptr<DistributedBackend> make_distributed_backend(MPI_Comm comm,
                                                              std::unique_ptr<Backend> local,
                                                              const ParallelOptions& options);
 std::unique_ptr<FluidExchange> make_fluid_exchange(MPI_Comm comm, const ParallelOptions& options,
-                                                   double support);
+                                                   const FluidSetup& fluid);
 
 }  // namespace qdemsph

@@ -27,13 +27,13 @@ void resize(FluidParticles& p, std::int64_t n) {
 
 class MpiFluidExchange final : public FluidExchange {
  public:
-  MpiFluidExchange(MPI_Comm comm, const ParallelOptions& o, double support)
+  MpiFluidExchange(MPI_Comm comm, const ParallelOptions& o, const FluidSetup& f)
       : curve_(parse_curve(o.curve)),
         every_(o.rebalance_every),
         threshold_(o.rebalance_threshold),
         max_cell_(o.max_cell_cost),
-        skin_(kFluidSkin * support),
-        band_((support + skin_) / 2) {
+        skin_(kFluidSkin * f.params.kernel.support()),
+        band_((f.params.kernel.support() + skin_) / 2, f.z0, f.period_z) {
     MPI_Comm_dup(comm, &comm_);
     MPI_Comm_rank(comm_, &me_);
     MPI_Comm_size(comm_, &np_);
@@ -86,12 +86,12 @@ class MpiFluidExchange final : public FluidExchange {
     std::vector<std::int64_t> off{0};
     std::vector<int> ranks;
     for (std::int64_t i = 0; i < nown; ++i) {
-      const BandCell c = band_cell(o.x[i], band_);
+      const BandCell c = band_.cell(o.x[i]);
       const std::uint64_t key = band_key(c.i[0], c.i[1], c.i[2]);
       auto it = near.find(key);
       if (it == near.end()) {
         std::vector<int> r;
-        for_each_band_neighbour(c, [&](std::uint64_t k) {
+        band_.for_each_neighbour(c, [&](std::uint64_t k) {
           const auto q = occupied.find(k);
           if (q != occupied.end()) r.insert(r.end(), q->second.begin(), q->second.end());
         });
@@ -161,7 +161,7 @@ class MpiFluidExchange final : public FluidExchange {
 
  private:
   std::uint64_t cell_key(Vec3 p) const {
-    const BandCell c = band_cell(p, band_);
+    const BandCell c = band_.cell(p);
     return band_key(c.i[0], c.i[1], c.i[2]);
   }
 
@@ -169,6 +169,7 @@ class MpiFluidExchange final : public FluidExchange {
   // box lies in at most 2 x 2 x 2 cells of some tree level, and each of their curve segments
   // (keys are hierarchical, sfc.hpp) lies in this rank's piece. Conservative: false may be
   // answered for an interior cell (it is then published needlessly), never true for another.
+  // Periodic z: a box across the seam is not interior.
   bool interior(std::uint64_t key) const {
     const SfcGrid& g = dec_.grid;
     const std::uint64_t first = dec_.splitters[me_], last = dec_.splitters[me_ + 1];
@@ -177,11 +178,12 @@ class MpiFluidExchange final : public FluidExchange {
     const std::int64_t c[3] = {static_cast<std::int64_t>(key >> 42) - off,
                                static_cast<std::int64_t>((key >> 21) & 0x1fffff) - off,
                                static_cast<std::int64_t>(key & 0x1fffff) - off};
+    if (band_.nz > 0 && (c[2] < 2 || c[2] + 3 > band_.nz)) return false;
     // The box's finest cells, one more on each side against round-off in band_cell's floor.
     std::uint32_t lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
-      lo[a] = g.coord(double(c[a] - 2) * band_, g.lo[a]);
-      hi[a] = g.coord(double(c[a] + 3) * band_, g.lo[a]);
+      lo[a] = g.coord(band_.lo(c[a] - 2, a), g.lo[a]);
+      hi[a] = g.coord(band_.lo(c[a] + 3, a), g.lo[a]);
       lo[a] -= lo[a] > 0;
       hi[a] += hi[a] + 1 < g.side();
     }
@@ -223,7 +225,7 @@ class MpiFluidExchange final : public FluidExchange {
   long every_ = 0;
   double threshold_ = 0, max_cell_ = 0;
   double skin_ = 0;  // the ghost band's margin beyond the kernel support
-  double band_ = 1;  // band cell width: half of support + skin
+  BandGrid band_;    // band cells: half of support + skin wide, wrapping a periodic z
   long steps_ = 0;   // keep() calls
   double load_ = 0;  // owned cost at the last distribute() (the owned set stands until the next)
   bool rebalance_ = false;  // the next distribute() cuts the partition again
@@ -239,12 +241,13 @@ class MpiFluidExchange final : public FluidExchange {
 }  // namespace
 
 std::unique_ptr<FluidExchange> make_fluid_exchange(MPI_Comm comm, const ParallelOptions& options,
-                                                   double support) {
-  return std::make_unique<MpiFluidExchange>(comm, options, support);
+                                                   const FluidSetup& fluid) {
+  return std::make_unique<MpiFluidExchange>(comm, options, fluid);
 }
 
-std::unique_ptr<FluidExchange> make_fluid_exchange(const ParallelOptions& options, double support) {
-  return make_fluid_exchange(MPI_COMM_WORLD, options, support);
+std::unique_ptr<FluidExchange> make_fluid_exchange(const ParallelOptions& options,
+                                                   const FluidSetup& fluid) {
+  return make_fluid_exchange(MPI_COMM_WORLD, options, fluid);
 }
 
 }  // namespace qdemsph

@@ -145,7 +145,7 @@ struct CoupledRun {
       auto d = make_distributed_backend(comm, make_host_backend(), options(25, 0.0));
       dist = d.get();
       be = std::move(d);
-      ex = make_fluid_exchange(comm, options(25, 0.0), f.params.kernel.support());
+      ex = make_fluid_exchange(comm, options(25, 0.0), f);
     }
     be->upload(m);
     solid = be->solid_views();

@@ -13,6 +13,8 @@
 //  - a dam break coupled to a free cube (markers in the fluid's exchange, every marker's force
 //    summed over the ranks and gathered to the cube's vertices in the one-rank order) equals
 //    one rank bit for bit;
+//  - a slab periodic in z (fluid.periodic_z: the ghost band wraps across the seam) equals one
+//    rank bit for bit, with one band cell across the period and with six;
 //  - the exchange's traffic (summary.json `parallel`: fluid_halo_bytes_per_step,
 //    fluid_migrated_bytes) is what its plans send: ghosts x bytes per ghost x refreshes.
 #include <gtest/gtest.h>
@@ -55,9 +57,8 @@ FluidSetup dam_setup() {
 std::unique_ptr<FluidStage> distributed_stage(const FluidSetup& f,
                                               const std::string& curve = "hilbert",
                                               long rebalance_every = 50) {
-  return make_fluid_stage(
-      "cpu", f, nullptr,
-      make_fluid_exchange(options(rebalance_every, 0.0, curve), f.params.kernel.support()));
+  return make_fluid_stage("cpu", f, nullptr,
+                          make_fluid_exchange(options(rebalance_every, 0.0, curve), f));
 }
 
 void step(FluidStage& s) {
@@ -262,7 +263,7 @@ TEST(DistributedFluid, CoupledDamBreakWithCubeEqualsOneRankBitForBit) {
 TEST(DistributedFluid, TrafficIsWhatThePlansSend) {
   const FluidSetup f = dam_setup();
   const int me = rank_of(), np = size_of();
-  auto ex = make_fluid_exchange(options(50, 0.0), f.params.kernel.support());
+  auto ex = make_fluid_exchange(options(50, 0.0), f);
   const std::int64_t n = f.size(), b = n * me / np, e = n * (me + 1) / np;
   FluidParticles p;
   for (std::int64_t i = b; i < e; ++i) {
@@ -321,7 +322,7 @@ TEST(DistributedFluid, TrafficIsWhatThePlansSend) {
 // per step), rebuilds by the skin rule and the cuts, and on one rank nothing sent.
 TEST(DistributedFluid, StageTrafficPerEvaluation) {
   const FluidSetup f = dam_setup();
-  auto ex = make_fluid_exchange(options(50, 0.0), f.params.kernel.support());
+  auto ex = make_fluid_exchange(options(50, 0.0), f);
   FluidExchange* x = ex.get();
   auto dist = make_fluid_stage("cpu", f, nullptr, std::move(ex));
   constexpr int kSteps = 120;
@@ -344,4 +345,76 @@ TEST(DistributedFluid, StageTrafficPerEvaluation) {
         "migrated %ld B\n",
         size_of(), kSteps, static_cast<long>(t.rebuilds), r.fluid_halo_bytes_per_step,
         static_cast<long>(r.fluid_migrated_bytes));
+}
+
+// A dam break in a slab periodic in z (fluid.periodic_z, walls in x and y only, gravity along
+// -y), the fluid given z velocities up to 1 m/s so that particles cross the seam: `layers`
+// particle layers across the period.
+FluidSetup periodic_setup(int layers) {
+  const double z = 0.01 * layers;
+  const std::string zs = std::to_string(z);
+  const Scene s = parse_scene(R"(
+run: {end_time: 0.1, dt: 2.0e-4}
+gravity: [0, -9.81, 0]
+fluid:
+  spacing: 0.01
+  blocks: [{min: [0, 0, 0], max: [0.1, 0.12, )" +
+                                  zs + R"(]}]
+  periodic_z: [0.0, )" + zs + R"(]
+  walls:
+    - {min: [-0.02, -0.02, 0.0], max: [0.0, 0.15, )" +
+                                  zs + R"(]}
+    - {min: [0.0, -0.02, 0.0], max: [0.25, 0.0, )" +
+                                  zs + R"(]}
+    - {min: [0.25, -0.02, 0.0], max: [0.27, 0.15, )" +
+                                  zs + R"(]}
+)",
+                              "periodic.yaml");
+  FluidSetup f = build_fluid(s.fluid, s.gravity);
+  for (std::int64_t i = 0; i < f.size(); ++i)
+    if (f.type[i] == kSphFluid) f.v[i].z = (static_cast<double>(f.gid[i] % 7) - 3.0) / 3.0;
+  return f;
+}
+
+TEST(DistributedFluid, PeriodicSlabEqualsOneRankBitForBit) {
+  // 3 layers: the period (0.03 m) is below the band cell (0.016 m) x 2, one band cell across
+  // it; 10 layers: six band cells, a seam between ranks' pieces.
+  for (int layers : {3, 10}) {
+    SCOPED_TRACE(std::to_string(layers) + " layers");
+    const FluidSetup f = periodic_setup(layers);
+    ASSERT_GT(f.period_z, 0.0);
+    const bool root = rank_of() == 0;
+    auto ref = root ? make_fluid_stage("cpu", f) : nullptr;
+    auto ex = make_fluid_exchange(options(25, 0.0), f);
+    FluidExchange* x = ex.get();
+    auto dist = make_fluid_stage("cpu", f, nullptr, std::move(ex));
+    constexpr int kSteps = 100;
+    StateDiff worst;
+    int bad_ids = 0, outside = 0;
+    for (int n = 1; n <= kSteps; ++n) {
+      if (ref) step(*ref);
+      step(*dist);
+      if (n % 20 != 0) continue;
+      const FluidState b = dist->save_state();
+      if (!root) continue;
+      bad_ids += !each_id_once(b, f.size());
+      for (const Vec3& p : b.x) outside += p.z < f.z0 || p.z >= f.z0 + f.period_z;
+      const StateDiff d = diff(ref->save_state(), b);
+      EXPECT_TRUE(d.same_order) << "step " << n;
+      worst.x = std::max(worst.x, d.x), worst.v = std::max(worst.v, d.v);
+      worst.a = std::max(worst.a, d.a), worst.rho = std::max(worst.rho, d.rho);
+      worst.p = std::max(worst.p, d.p), worst.m = std::max(worst.m, d.m);
+    }
+    const FluidTraffic t = x->traffic();
+    if (root) {
+      std::printf(
+          "[periodic slab, %d layers, %d ranks, %ld particles, %d steps] max |dx| = %.3e m, "
+          "|dv| = %.3e m/s, |drho| = %.3e, |dp| = %.3e Pa; %ld layout rebuilds\n",
+          layers, size_of(), static_cast<long>(f.size()), kSteps, worst.x, worst.v, worst.rho,
+          worst.p, static_cast<long>(t.rebuilds));
+      EXPECT_EQ(bad_ids, 0);
+      EXPECT_EQ(outside, 0) << "a particle outside the period";
+      EXPECT_EQ(worst.max(), 0.0);
+    }
+  }
 }
