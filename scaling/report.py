@@ -84,7 +84,8 @@ def efficiencies(rs, mode):
     for r in rs:
         n = r["ranks"]
         row = {"ranks": n, "step_s": r["step_s"], "imbalance": r.get("imbalance"),
-               "halo_bytes_per_step": r.get("halo_bytes_per_step"), "size": r["size"]}
+               "halo_bytes_per_step": r.get("halo_bytes_per_step"),
+               "fluid_halo_bytes_per_step": r.get("fluid_halo_bytes_per_step"), "size": r["size"]}
         for ref in (1, 8):
             if ref in t and n >= ref:
                 row[f"E{ref}"] = t[ref] / t[n] if mode == "weak" else ref * t[ref] / (n * t[n])
@@ -147,14 +148,17 @@ def plots(recs):
         if cop:
             md.append("E vs 1 = node x decomposition: *node* = t(1) / t(N copies of the 1-rank run at once, "
                       "one per core), *decomposition* = t(N copies) / t(N ranks).\n")
-        md.append("| ranks | tets | particles | ms/step | E vs 1 | E vs 8 | node | decomposition | imbalance | halo MB/step |")
-        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+        md.append("| ranks | tets | particles | ms/step | E vs 1 | E vs 8 | node | decomposition | imbalance | halo MB/step "
+                  "| fluid halo MB/step |")
+        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
         for row in rows:
             f = lambda v, s="{:.3f}": "" if v is None else s.format(v)  # noqa: E731
+            mb = lambda v: f(None if v is None else v / 1e6, "{:.2f}")  # noqa: E731
             md.append(f"| {row['ranks']} | {row['size']['n_tets']:,} | {row['size']['n_particles']:,} | "
                       f"{row['step_s'] * 1e3:.2f} | {f(row.get('E1'))} | {f(row.get('E8'))} | "
                       f"{f(row.get('node'))} | {f(row.get('decomp'))} | "
-                      f"{f(row['imbalance'])} | {f(None if row['halo_bytes_per_step'] is None else row['halo_bytes_per_step'] / 1e6, '{:.2f}')} |")
+                      f"{f(row['imbalance'])} | {mb(row['halo_bytes_per_step'])} | "
+                      f"{mb(row.get('fluid_halo_bytes_per_step'))} |")
         pred = model_line(rs, sweep, backend, ranks) if mode == "weak" and not variant and len(rs) > 1 else None
         if pred:
             md.append(f"\nModel PREDICTION for these runs (costs from the 1-rank record, network {pred[1]}): "
@@ -222,14 +226,15 @@ def plots(recs):
         ns = sorted(set(vs["balanced"]) & set(vs["static"]))
         md.append(f"\n### {sweep}: load balancer on vs static partition ({backend}, {mach})\n")
         md.append("Time per step with (re)partitioning and migration included (step_s_all).\n")
-        md.append("| ranks | balanced ms/step | static ms/step | gain | imbalance balanced | imbalance static | rebalances | migrated MB |")
-        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|")
+        md.append("| ranks | balanced ms/step | static ms/step | gain | imbalance balanced | imbalance static | rebalances "
+                  "| migrated MB | fluid migrated MB |")
+        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
         for n in ns:
             b, s = vs["balanced"][n], vs["static"][n]
             tb, ts = b.get("step_s_all", b["step_s"]), s.get("step_s_all", s["step_s"])
             md.append(f"| {n} | {tb * 1e3:.2f} | {ts * 1e3:.2f} | {ts / tb:.2f}x | "
                       f"{b.get('imbalance') or 0:.3f} | {s.get('imbalance') or 0:.3f} | {b.get('rebalances')} | "
-                      f"{(b.get('migrated_bytes') or 0) / 1e6:.1f} |")
+                      f"{(b.get('migrated_bytes') or 0) / 1e6:.1f} | {(b.get('fluid_migrated_bytes') or 0) / 1e6:.1f} |")
         if plt is None:
             continue
         fig, ax = plt.subplots(figsize=(6.5, 4))

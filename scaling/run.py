@@ -176,7 +176,8 @@ def make_record(meta, launch, summary, facts, run_wall, status, note="") -> dict
         rec["distributed"] = bool(par)
         if par:
             rec["parallel"] = par
-            for k in ("imbalance", "imbalance_initial", "halo_bytes_per_step", "migrated_bytes", "rebalances", "curve"):
+            for k in ("imbalance", "imbalance_initial", "halo_bytes_per_step", "migrated_bytes",
+                      "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "rebalances", "curve"):
                 rec[k] = par.get(k)
         c = summary.get("contact") or {}
         rec["items"] = {"tets": summary.get("n_tets") or 0, "vertices": summary.get("n_vertices") or 0,
@@ -315,6 +316,7 @@ def run_sweep(a) -> list[dict]:
                 par = summary.get("parallel") or {}
                 print(f"  N={n:3d} {var or '':9s} {rec['step_s'] * 1e3:9.2f} ms/step  wall {rec['wall_s']:.1f} s  "
                       f"imbalance {par.get('imbalance', float('nan')):.3f}  halo {par.get('halo_bytes_per_step', 0) / 1e6:.2f} MB/step  "
+                      f"fluid halo {par.get('fluid_halo_bytes_per_step', 0) / 1e6:.2f} MB/step  "
                       f"phases/step " + " ".join(f"{k}={v * 1e3:.2f}" for k, v in rec["phases_per_step"].items() if v > 0),
                       flush=True)
             else:

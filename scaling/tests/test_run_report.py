@@ -52,3 +52,8 @@ def test_weak_efficiency_against_1_and_8_ranks():
 def test_strong_efficiency():
     rows = report.efficiencies([rec(1, 8.0, "strong"), rec(4, 2.5, "strong")], "strong")
     assert rows[1]["E1"] == pytest.approx(8.0 / (4 * 2.5)) and rows[1]["speedup"] == pytest.approx(3.2)
+
+
+def test_fluid_halo_bytes_reach_the_table_rows():
+    rows = report.efficiencies([{**rec(2, 1.0), "fluid_halo_bytes_per_step": 2.5e6}, rec(4, 1.1)], "weak")
+    assert rows[0]["fluid_halo_bytes_per_step"] == 2.5e6 and rows[1]["fluid_halo_bytes_per_step"] is None

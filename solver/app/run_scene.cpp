@@ -180,6 +180,9 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   double dt = choose_dt(model, scene.run.dt, scene.run.dt_safety);
   std::optional<FluidSetup> fluid_setup;
   std::unique_ptr<FluidStage> fluid;
+#ifdef QDEMSPH_HAVE_MPI
+  FluidExchange* fluid_exchange = nullptr;  // the stage's, asked for its traffic at the end
+#endif
   int solid_substeps = 1;
   if (scene.fluid.present) {
     fluid_setup = build_fluid(scene.fluid, scene.gravity);
@@ -194,9 +197,8 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     // Under mpirun the particles are distributed too (parallel/fluid_exchange.hpp).
     std::unique_ptr<FluidExchange> exchange;
 #ifdef QDEMSPH_HAVE_MPI
-    if (distributed)
-      exchange = make_fluid_exchange(parallel_options(scene.parallel),
-                                     fluid_setup->params.kernel.support());
+    if (distributed) exchange = make_fluid_exchange(parallel_options(scene.parallel), *fluid_setup);
+    fluid_exchange = exchange.get();
 #endif
     SolidViews solid;
     if (fluid_setup->n_marker > 0) solid = be->solid_views();
@@ -387,7 +389,11 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     }
     summary["phases"] = phases;
 #ifdef QDEMSPH_HAVE_MPI
-    if (dist) summary["parallel"] = dist->record(timers.seconds()).to_json();
+    if (dist) {
+      ParallelRecord r = dist->record(timers.seconds());
+      if (fluid_exchange) r.set_fluid(fluid_exchange->traffic());
+      summary["parallel"] = r.to_json();
+    }
 #endif
     if (!distributed)
       summary["parallel"] =

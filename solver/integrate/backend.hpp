@@ -46,13 +46,16 @@ struct HostFields {
 // needs to continue exactly. Vertex fields [n_vertices]: position, velocity, the force of the
 // last evaluation (the next half kick uses it), the mass-damping dissipation and the
 // relaxation start state (mark_relax_start); per-tet viscous dissipation [n_tets]; the
-// contact stage's state. A checkpoint stores it (integrate/restart.hpp); a distributed run
-// carries it across a rebuild of its decomposition (parallel/distributed_backend.cpp).
+// contact stage's state; a coupled run's fluid force fc [n_vertices] (SolidViews: the next
+// sub-steps add it to f, and the coupling's next velocity correction is taken against it). A
+// checkpoint stores it (integrate/restart.hpp); a distributed run carries it across a rebuild of
+// its decomposition (parallel/distributed_backend.cpp).
 struct BackendState {
   std::vector<Vec3> x, v, f;
   std::vector<double> diss_v, diss_t;
   std::vector<Vec3> x0, f0;             // empty in load_state: zero
   std::optional<ContactState> contact;  // present when the model has contact
+  std::vector<Vec3> fc;                 // coupled to a fluid (solid_views), else empty: zero
 };
 
 // A distributed backend's exchange around the coupling (parallel/distributed_backend.hpp): its

@@ -420,6 +420,7 @@ class QdemBackend final : public Backend {
     s.x0 = x0_.to_host();
     s.f0 = f0_.to_host();
     if (contact_) s.contact = contact_->save_state();
+    if (fc_.size() > 0) s.fc = fc_.to_host();
     return s;
   }
 
@@ -430,7 +431,7 @@ class QdemBackend final : public Backend {
     const bool relax = !s.x0.empty() || !s.f0.empty();
     if (!fits(s.x, nv_) || !fits(s.v, nv_) || !fits(s.f, nv_) || !fits(s.diss_v, nv_) ||
         !fits(s.diss_t, nt_) || (relax && (!fits(s.x0, nv_) || !fits(s.f0, nv_))) ||
-        s.contact.has_value() != (contact_ != nullptr))
+        (!s.fc.empty() && !fits(s.fc, nv_)) || s.contact.has_value() != (contact_ != nullptr))
       throw InputError("backend state does not fit the model (vertex, tet or contact counts)");
     x_.assign(s.x);
     v_.assign(s.v);
@@ -445,6 +446,10 @@ class QdemBackend final : public Backend {
       f0_.zero();
     }
     if (contact_) contact_->load_state(*s.contact);
+    if (!s.fc.empty())
+      fc_.assign(s.fc);
+    else if (fc_.size() > 0)
+      fc_.zero();
   }
 
   void sync() override { exec_sync(Exec{}); }

@@ -282,8 +282,17 @@ void restore_checkpoint(const Checkpoint& c, const std::string& source, const Sc
   const std::size_t nv = model.gid.size(), nt = model.tet_gid.size();
   if (c.vertex_gid.size() != nv || c.solid.x.size() != nv || c.solid.v.size() != nv ||
       c.solid.f.size() != nv || c.solid.diss_v.size() != nv || c.tet_gid.size() != nt ||
-      c.solid.diss_t.size() != nt)
+      c.solid.diss_t.size() != nt || (!c.solid.fc.empty() && c.solid.fc.size() != nv))
     throw fail("solid arrays do not match the vertex and tet counts");
+  // A coupled run's bodies carry the fluid's force between fluid steps (SolidViews::fc).
+  const bool coupled = fluid_setup && fluid_setup->n_marker > 0;
+  if (coupled && c.solid.fc.empty())
+    throw fail(
+        "no coupling force (/solid/fc): it was written by a qdemsph that did not store it, and "
+        "a run coupling fluid and bodies cannot continue exactly without it; start the run "
+        "again");
+  if (!coupled && !c.solid.fc.empty())
+    throw fail("a coupling force, but the scene couples no fluid to bodies");
   std::unordered_map<std::uint64_t, std::size_t> vloc, tloc;
   for (std::size_t i = 0; i < nv; ++i) vloc.emplace(model.gid[i], i);
   for (std::size_t t = 0; t < nt; ++t) tloc.emplace(model.tet_gid[t], t);
@@ -293,6 +302,7 @@ void restore_checkpoint(const Checkpoint& c, const std::string& source, const Sc
   s.f.resize(nv);
   s.diss_v.resize(nv);
   s.diss_t.resize(nt);
+  if (coupled) s.fc.resize(nv);
   for (std::size_t k = 0; k < nv; ++k) {
     const auto it = vloc.find(c.vertex_gid[k]);
     if (it == vloc.end())
@@ -301,6 +311,7 @@ void restore_checkpoint(const Checkpoint& c, const std::string& source, const Sc
     s.v[it->second] = c.solid.v[k];
     s.f[it->second] = c.solid.f[k];
     s.diss_v[it->second] = c.solid.diss_v[k];
+    if (coupled) s.fc[it->second] = c.solid.fc[k];
   }
   for (std::size_t k = 0; k < nt; ++k) {
     const auto it = tloc.find(c.tet_gid[k]);

@@ -62,6 +62,7 @@ void write_contents(hid_t file, const Checkpoint& c) {
     h5::write(g.id, "dissipated", c.solid.diss_v);
     h5::write(g.id, "tet_gid", c.tet_gid);
     h5::write(g.id, "tet_dissipated", c.solid.diss_t);
+    if (!c.solid.fc.empty()) h5::write(g.id, "fc", c.solid.fc);
   }
   if (c.solid.contact) {
     const ContactState& s = *c.solid.contact;
@@ -144,6 +145,7 @@ Checkpoint read_contents(hid_t file) {
     c.solid.diss_v = h5::read<double>(g.id, "dissipated");
     c.tet_gid = h5::read<std::uint64_t>(g.id, "tet_gid");
     c.solid.diss_t = h5::read<double>(g.id, "tet_dissipated");
+    if (h5::exists(g.id, "fc")) c.solid.fc = h5::read_vec3(g.id, "fc");
   }
   if (h5::exists(file, "contact")) {
     Handle g(H5Gopen2(file, "contact", H5P_DEFAULT), H5Gclose, "open /contact");

@@ -4,7 +4,9 @@
 //   /                attributes format ("qdemsph checkpoint"), version (1), time, dt (double),
 //                    step (int64), scene (string); fingerprint (string: "item\tvalue" lines)
 //   /solid/          vertex_gid (N) uint64, x v f (N,3), dissipated (N);
-//                    tet_gid (M) uint64, tet_dissipated (M)
+//                    tet_gid (M) uint64, tet_dissipated (M); fc (N,3): the fluid's coupling
+//                    force (scenes with fluid.couple_bodies only; files written before it was
+//                    stored lack it and are refused for such scenes)
 //   /contact/        (contact scenes) the history (contact/contact_state.hpp), one row per
 //                    active record of the last step, in key order: history_type (K) uint8,
 //                    history_feature1/2 (K,3) uint64 (global vertex ids; unused slots

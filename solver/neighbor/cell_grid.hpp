@@ -96,6 +96,12 @@ struct CellGrid {
     if (period_z > 0) x.z += ((zz - unwrapped_z(x.z)) / n[2]) * period_z;
     return x;
   }
+  // Periodic z: the difference d of two positions moved by whole periods to its nearest image
+  // (|d.z| <= period_z / 2); d itself when not periodic.
+  QDEMSPH_HD Vec3 nearest(Vec3 d) const {
+    if (period_z > 0) d.z -= period_z * floor(d.z / period_z + 0.5);
+    return d;
+  }
   // Periodic z: x moved by whole periods into [origin.z, origin.z + period_z).
   QDEMSPH_HD Vec3 wrap(Vec3 x) const {
     if (period_z > 0) x.z -= period_z * floor((x.z - origin.z) / period_z);

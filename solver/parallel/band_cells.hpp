@@ -1,6 +1,7 @@
 // The band around a rank's items (docs/parallel.md items 4 and "Fluid"): a fixed grid of
 // cells of width `band`; every point within two band widths of a point of a cell lies in the
 // 5^3 cells around it, so the ranks with items in those cells are all that may need a copy.
+// BandGrid adds a periodic z (the SPH fluid's `periodic_z`): the cells wrap across the seam.
 #pragma once
 
 #include <algorithm>
@@ -42,5 +43,41 @@ void for_each_band_neighbour(const BandCell& c, F f) {
     for (int b = -2; b <= 2; ++b)
       for (int d = -2; d <= 2; ++d) f(band_key(c.i[0] + a, c.i[1] + b, c.i[2] + d));
 }
+
+// Band cells, periodic in z over [z0, z0 + period) when period > 0: then nz = floor(period /
+// band) (at least 1) cells of width period / nz >= band tile the period and z indices wrap
+// (mod nz), so the 5^3 cells around a cell still hold every point within two band widths of
+// it, across the seam too (with nz < 5 a cell appears more than once among them).
+struct BandGrid {
+  double band = 1;
+  double z0 = 0, band_z = 1;
+  std::int64_t nz = 0;  // periodic: cells per period; 0: not periodic
+
+  explicit BandGrid(double width, double z_0 = 0, double period = 0)
+      : band(width), z0(z_0), band_z(width) {
+    if (!(period > 0)) return;
+    nz = std::max<std::int64_t>(1, static_cast<std::int64_t>(std::floor(period / width)));
+    band_z = period / static_cast<double>(nz);
+  }
+  BandCell cell(Vec3 p) const {
+    BandCell c = band_cell(p, band);
+    if (nz > 0) c.i[2] = wrap(band_cell(Vec3{0, 0, p.z - z0}, band_z).i[2]);
+    return c;
+  }
+  template <class F>
+  void for_each_neighbour(const BandCell& c, F f) const {
+    if (nz == 0) return for_each_band_neighbour(c, f);
+    for (int a = -2; a <= 2; ++a)
+      for (int b = -2; b <= 2; ++b)
+        for (int d = -2; d <= 2; ++d) f(band_key(c.i[0] + a, c.i[1] + b, wrap(c.i[2] + d)));
+  }
+  // The lower coordinate of cells i along axis a (i unwrapped).
+  double lo(std::int64_t i, int a) const {
+    return a == 2 && nz > 0 ? z0 + static_cast<double>(i) * band_z : static_cast<double>(i) * band;
+  }
+
+ private:
+  std::int64_t wrap(std::int64_t i) const { return ((i % nz) + nz) % nz; }
+};
 
 }  // namespace qdemsph

@@ -584,6 +584,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       }
     }
     for (std::size_t k = 0; k < a.tet.size(); ++k) w.diss_t[a.tet[k]] = a.diss_t[k];
+    if (coupled_) w.fc = cfc_.to_host();  // every coupled vertex's, the same on every rank
     if (!contact_) return w;
     const ContactState& h = a.contact;
     std::vector<std::size_t> order(h.size());
@@ -616,8 +617,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     const bool relax = !w.x0.empty();
     if (!fits(w.x, nv) || !fits(w.v, nv) || !fits(w.f, nv) || !fits(w.diss_v, nv) ||
         !fits(w.diss_t, nt) || (relax && (!fits(w.x0, nv) || !fits(w.f0, nv))) ||
-        w.contact.has_value() != contact_)
+        (!w.fc.empty() && !fits(w.fc, nv)) || w.contact.has_value() != contact_)
       throw InputError("backend state does not fit the model (vertex, tet or contact counts)");
+    // The coupling force of every vertex (whole-model, as the coupling keeps it on every rank);
+    // adopt() installs the owned vertices' in the new local model.
+    if (coupled_) cfc_.assign(w.fc.empty() ? std::vector<Vec3>(nv) : w.fc);
     StateSlice s;
     const std::int64_t nfv = g.n_free_vertices, nft = g.n_free_tets;
     for (std::int64_t i = nfv * me_ / np_; i < nfv * (me_ + 1) / np_; ++i)

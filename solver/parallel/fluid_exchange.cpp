@@ -8,6 +8,7 @@
 #include "parallel/band_cells.hpp"
 #include "parallel/collectives.hpp"
 #include "parallel/comm_plan.hpp"
+#include "parallel/distributed_backend_mpi.hpp"
 #include "sph/fluid_setup.hpp"
 
 namespace qdemsph {
@@ -26,13 +27,13 @@ void resize(FluidParticles& p, std::int64_t n) {
 
 class MpiFluidExchange final : public FluidExchange {
  public:
-  MpiFluidExchange(MPI_Comm comm, const ParallelOptions& o, double support)
+  MpiFluidExchange(MPI_Comm comm, const ParallelOptions& o, const FluidSetup& f)
       : curve_(parse_curve(o.curve)),
         every_(o.rebalance_every),
         threshold_(o.rebalance_threshold),
         max_cell_(o.max_cell_cost),
-        skin_(kFluidSkin * support),
-        band_((support + skin_) / 2) {
+        skin_(kFluidSkin * f.params.kernel.support()),
+        band_((f.params.kernel.support() + skin_) / 2, f.z0, f.period_z) {
     MPI_Comm_dup(comm, &comm_);
     MPI_Comm_rank(comm_, &me_);
     MPI_Comm_size(comm_, &np_);
@@ -45,6 +46,9 @@ class MpiFluidExchange final : public FluidExchange {
   }
 
   std::int64_t distribute(FluidParticles& p) override {
+    if (!after_keep_) ++evaluations_;  // else keep() counted this evaluation
+    after_keep_ = false;
+    ++rebuilds_;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
     std::vector<double> cost(n);
     for (std::int64_t i = 0; i < n; ++i) cost[i] = p.type[i] == kSphFluid ? 1.0 : kFluidWallCost;
@@ -59,6 +63,7 @@ class MpiFluidExchange final : public FluidExchange {
     resize(o, mp.n_new());
     mp.begin(fields_of(p));
     mp.finish(fields_of(o));
+    migrated_bytes_ += mp.engine().last_bytes();
     const std::int64_t nown = mp.n_new();
     load_ = 0;
     for (std::int64_t i = 0; i < nown; ++i) load_ += o.type[i] == kSphFluid ? 1.0 : kFluidWallCost;
@@ -75,18 +80,18 @@ class MpiFluidExchange final : public FluidExchange {
     for (auto c : mine)
       if (!interior(c)) pub.push_back({c, me_});
     std::unordered_map<std::uint64_t, std::vector<int>> occupied;  // cell -> other ranks
-    for (const auto& [c, r] : allgatherv(comm_, pub))
+    for (const auto& [c, r] : allgatherv(comm_, pub, &band_bytes_))
       if (r != me_) occupied[c].push_back(static_cast<int>(r));
     std::unordered_map<std::uint64_t, std::vector<int>> near;  // cell -> ranks within the band
     std::vector<std::int64_t> off{0};
     std::vector<int> ranks;
     for (std::int64_t i = 0; i < nown; ++i) {
-      const BandCell c = band_cell(o.x[i], band_);
+      const BandCell c = band_.cell(o.x[i]);
       const std::uint64_t key = band_key(c.i[0], c.i[1], c.i[2]);
       auto it = near.find(key);
       if (it == near.end()) {
         std::vector<int> r;
-        for_each_band_neighbour(c, [&](std::uint64_t k) {
+        band_.for_each_neighbour(c, [&](std::uint64_t k) {
           const auto q = occupied.find(k);
           if (q != occupied.end()) r.insert(r.end(), q->second.begin(), q->second.end());
         });
@@ -103,18 +108,22 @@ class MpiFluidExchange final : public FluidExchange {
     const auto f = fields_of(o);
     halo_->gather_begin(f);
     halo_->gather_finish(f);
+    halo_bytes_ += halo_->engine().last_bytes();
     p = std::move(o);
     return nown;
   }
 
   bool keep(double moved) override {
     ++steps_;
+    ++evaluations_;
     if (rebalance_due()) {
       rebalance_ = true;
-      return false;
+    } else {
+      MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_DOUBLE, MPI_MAX, comm_);
+      if (moved <= skin_ / 2) return true;
     }
-    MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_DOUBLE, MPI_MAX, comm_);
-    return moved <= skin_ / 2;
+    after_keep_ = true;
+    return false;
   }
   double skin() const override { return skin_; }
 
@@ -126,7 +135,9 @@ class MpiFluidExchange final : public FluidExchange {
   }
   std::span<const std::byte> refresh() override {
     halo_->engine().begin_packed();
-    return halo_->engine().finish_packed();
+    const auto in = halo_->engine().finish_packed();
+    halo_bytes_ += halo_->engine().last_bytes();
+    return in;
   }
 
   void sum(std::span<double> v) override {
@@ -145,10 +156,15 @@ class MpiFluidExchange final : public FluidExchange {
   }
   int rank() const override { return me_; }
   int size() const override { return np_; }
+  FluidTraffic traffic() override {
+    std::int64_t b[3] = {halo_bytes_, migrated_bytes_, band_bytes_};
+    MPI_Allreduce(MPI_IN_PLACE, b, 3, MPI_INT64_T, MPI_SUM, comm_);
+    return {evaluations_, rebuilds_, b[0], b[1], b[2]};
+  }
 
  private:
   std::uint64_t cell_key(Vec3 p) const {
-    const BandCell c = band_cell(p, band_);
+    const BandCell c = band_.cell(p);
     return band_key(c.i[0], c.i[1], c.i[2]);
   }
 
@@ -156,6 +172,7 @@ class MpiFluidExchange final : public FluidExchange {
   // box lies in at most 2 x 2 x 2 cells of some tree level, and each of their curve segments
   // (keys are hierarchical, sfc.hpp) lies in this rank's piece. Conservative: false may be
   // answered for an interior cell (it is then published needlessly), never true for another.
+  // Periodic z: a box across the seam is not interior.
   bool interior(std::uint64_t key) const {
     const SfcGrid& g = dec_.grid;
     const std::uint64_t first = dec_.splitters[me_], last = dec_.splitters[me_ + 1];
@@ -164,11 +181,12 @@ class MpiFluidExchange final : public FluidExchange {
     const std::int64_t c[3] = {static_cast<std::int64_t>(key >> 42) - off,
                                static_cast<std::int64_t>((key >> 21) & 0x1fffff) - off,
                                static_cast<std::int64_t>(key & 0x1fffff) - off};
+    if (band_.nz > 0 && (c[2] < 2 || c[2] + 3 > band_.nz)) return false;
     // The box's finest cells, one more on each side against round-off in band_cell's floor.
     std::uint32_t lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
-      lo[a] = g.coord(double(c[a] - 2) * band_, g.lo[a]);
-      hi[a] = g.coord(double(c[a] + 3) * band_, g.lo[a]);
+      lo[a] = g.coord(band_.lo(c[a] - 2, a), g.lo[a]);
+      hi[a] = g.coord(band_.lo(c[a] + 3, a), g.lo[a]);
       lo[a] -= lo[a] > 0;
       hi[a] += hi[a] + 1 < g.side();
     }
@@ -210,18 +228,29 @@ class MpiFluidExchange final : public FluidExchange {
   long every_ = 0;
   double threshold_ = 0, max_cell_ = 0;
   double skin_ = 0;  // the ghost band's margin beyond the kernel support
-  double band_ = 1;  // band cell width: half of support + skin
+  BandGrid band_;    // band cells: half of support + skin wide, wrapping a periodic z
   long steps_ = 0;   // keep() calls
   double load_ = 0;  // owned cost at the last distribute() (the owned set stands until the next)
   bool rebalance_ = false;  // the next distribute() cuts the partition again
+  // Traffic (this rank's bytes sent): evaluations counts keep() calls and the distribute()
+  // calls no keep() asked for (the first, and the one after a load_state).
+  bool after_keep_ = false;  // the next distribute() is the one a keep() asked for
+  std::int64_t evaluations_ = 0, rebuilds_ = 0;
+  std::int64_t halo_bytes_ = 0, migrated_bytes_ = 0, band_bytes_ = 0;
   Decomposition dec_;
   std::unique_ptr<HaloPlan> halo_;
 };
 
 }  // namespace
 
-std::unique_ptr<FluidExchange> make_fluid_exchange(const ParallelOptions& options, double support) {
-  return std::make_unique<MpiFluidExchange>(MPI_COMM_WORLD, options, support);
+std::unique_ptr<FluidExchange> make_fluid_exchange(MPI_Comm comm, const ParallelOptions& options,
+                                                   const FluidSetup& fluid) {
+  return std::make_unique<MpiFluidExchange>(comm, options, fluid);
+}
+
+std::unique_ptr<FluidExchange> make_fluid_exchange(const ParallelOptions& options,
+                                                   const FluidSetup& fluid) {
+  return make_fluid_exchange(MPI_COMM_WORLD, options, fluid);
 }
 
 }  // namespace qdemsph

@@ -18,6 +18,7 @@
 
 #include "parallel/distributed_backend.hpp"
 #include "sph/fluid_exchange.hpp"
+#include "sph/fluid_setup.hpp"
 
 namespace qdemsph {
 
@@ -32,7 +33,9 @@ inline constexpr double kFluidWallCost = 0.25;
 // the 3,280-particle test dam break (test_distributed_fluid.cpp) rebuilds after 37-133 steps.
 inline constexpr double kFluidSkin = 0.25;
 
-// support: the kernel support 2h (the ghost band is support (1 + kFluidSkin) wide).
-std::unique_ptr<FluidExchange> make_fluid_exchange(const ParallelOptions& options, double support);
+// For the stage of `fluid`: the ghost band is its kernel support 2h x (1 + kFluidSkin) wide,
+// and wraps its periodic z (fluid.periodic_z).
+std::unique_ptr<FluidExchange> make_fluid_exchange(const ParallelOptions& options,
+                                                   const FluidSetup& fluid);
 
 }  // namespace qdemsph

@@ -2,6 +2,13 @@
 
 namespace qdemsph {
 
+void ParallelRecord::set_fluid(const FluidTraffic& t) {
+  fluid_halo_bytes_per_step =
+      t.evaluations > 0 ? static_cast<double>(t.halo_bytes) / static_cast<double>(t.evaluations)
+                        : 0.0;
+  fluid_migrated_bytes = t.migrated_bytes + t.band_bytes;
+}
+
 Json ParallelRecord::to_json() const {
   Json j = Json::object();
   j["ranks"] = ranks;
@@ -11,6 +18,8 @@ Json ParallelRecord::to_json() const {
   j["imbalance_initial"] = imbalance_initial;
   j["migrated_bytes"] = migrated_bytes;
   j["halo_bytes_per_step"] = halo_bytes_per_step;
+  j["fluid_halo_bytes_per_step"] = fluid_halo_bytes_per_step;
+  j["fluid_migrated_bytes"] = fluid_migrated_bytes;
   Json ov = Json::array(), ot = Json::array();
   for (auto n : owned_vertices) ov.push_back(n);
   for (auto n : owned_tets) ot.push_back(n);

@@ -8,6 +8,11 @@
 //   imbalance_initial    the same over the first window, before any rebalancing
 //   migrated_bytes       bytes sent between ranks by migrations (state, owners, history)
 //   halo_bytes_per_step  bytes sent by all ranks' halo exchanges per force evaluation
+//   fluid_halo_bytes_per_step   the SPH fluid's (sph/fluid_exchange.hpp, FluidTraffic): bytes
+//                        sent by all ranks through the ghost plan (the ghost fill of each
+//                        layout rebuild and the refreshes of every step) per fluid evaluation
+//   fluid_migrated_bytes the fluid's bytes at its layout rebuilds: particles to new owners and
+//                        the allgathered border band cells (bytes x (ranks - 1))
 //   owned_vertices, owned_tets   per rank: owned free vertices, home free tets (at the end)
 //   phases_max, phases_mean      per phase, seconds over ranks (kParallelPhases)
 //   rebalance_log        [{step, imbalance_before, imbalance_after, bytes}]; imbalance_after
@@ -21,6 +26,7 @@
 
 #include "io/json.hpp"
 #include "model/model.hpp"
+#include "sph/fluid_exchange.hpp"
 
 namespace qdemsph {
 
@@ -40,10 +46,14 @@ struct ParallelRecord {
   double imbalance = 0, imbalance_initial = 0;
   std::int64_t migrated_bytes = 0;
   double halo_bytes_per_step = 0;
+  double fluid_halo_bytes_per_step = 0;
+  std::int64_t fluid_migrated_bytes = 0;
   std::vector<std::int64_t> owned_vertices, owned_tets;
   std::map<std::string, double> phases_max, phases_mean;
   std::vector<RebalanceEntry> rebalance_log;
 
+  // The distributed fluid's fields from its exchange's traffic.
+  void set_fluid(const FluidTraffic& t);
   Json to_json() const;
 };
 

@@ -39,6 +39,17 @@ struct FluidParticles {
   std::size_t size() const { return x.size(); }
 };
 
+// What a distributed fluid sent between ranks so far, summed over the ranks (summary.json
+// `parallel`: docs/parallel.md, "Records"). Bytes sent to another rank; a rank's copies to
+// itself are not counted.
+struct FluidTraffic {
+  std::int64_t evaluations = 0;     // fluid evaluations (SphStage::compute() calls)
+  std::int64_t rebuilds = 0;        // distribute() calls
+  std::int64_t halo_bytes = 0;      // ghost slots filled at each distribute() and refreshed
+  std::int64_t migrated_bytes = 0;  // particles moved to new owners at each distribute()
+  std::int64_t band_bytes = 0;      // border band cells allgathered at each distribute()
+};
+
 class FluidExchange {
  public:
   virtual ~FluidExchange() = default;
@@ -70,6 +81,8 @@ class FluidExchange {
   virtual std::vector<std::uint64_t> gather(const std::vector<std::uint64_t>& mine) = 0;
   virtual int rank() const = 0;
   virtual int size() const = 0;
+  // The traffic so far, the same on every rank. Collective.
+  virtual FluidTraffic traffic() = 0;
 };
 
 }  // namespace qdemsph

@@ -107,10 +107,6 @@ class SphStage final : public FluidStage {
         CellGrid::cover(f.lo, f.hi, P_.kernel.support() / kSphCellsPerSupport, f.z0, f.period_z);
     grid_ = grid_all_;
     start_.resize(kSphGroups * grid_.count() + 1);
-    if (ex_ && f.period_z > 0)
-      throw InputError(
-          "fluid.periodic_z: a periodic fluid is not distributed over MPI ranks yet; run it "
-          "on one rank (docs/parallel.md)");
     if (double(kSphGroups) * double(grid_all_.count()) >= std::ldexp(1.0, 64 - kSphKeyShift))
       throw InputError(
           "fluid: too many neighbour cells for the particle order keys (coarsen "
@@ -515,7 +511,8 @@ class SphStage final : public FluidStage {
     laid_out_ = true;
     // The neighbour grid: the window of the whole box's cells that holds this rank's particles,
     // widened by the cells they can reach while the layout stands (skin / 2), so none leaves it
-    // (coordinates outside a window are clamped into its border cells).
+    // (coordinates outside a window are clamped into its border cells). A periodic z keeps all
+    // its cells (they wrap: a rank at the seam holds ghosts from the other side).
     const int margin = static_cast<int>(std::ceil(0.5 * ex_->skin() * grid_all_.inv_cell));
     int lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
     for (int a = 0; a < 3; ++a) {
@@ -527,19 +524,24 @@ class SphStage final : public FluidStage {
       if (q.x.empty()) lo[a] = 0;  // no particle: one cell
       lo[a] = std::max(lo[a] - margin, 0);
       hi[a] = std::min(std::max(hi[a], lo[a]) + margin, grid_all_.n[a] - 1);
+      if (a == 2 && grid_all_.period_z > 0) lo[a] = 0, hi[a] = grid_all_.n[a] - 1;
     }
     grid_ = grid_all_.window(lo, hi);
     start_.resize(kSphGroups * grid_.count() + 1);
   }
 
-  // Distributed: the largest displacement of an owned particle since the last redistribute().
+  // Distributed: the largest displacement of an owned particle since the last redistribute()
+  // (across a periodic z's seam, the nearest image's).
   double moved() {
     const auto x = x_.cview(), x0 = x0_.cview();
     const auto slot = slot_.cview();
     const std::int64_t nown = n_own_;
+    const CellGrid g = grid_all_;
     return reduce_max(
         Exec{}, n_,  // fluid and markers (walls do not move)
-        QDEMSPH_LAMBDA(std::int64_t i) { return slot[i] < nown ? norm(x[i] - x0[slot[i]]) : 0.0; },
+        QDEMSPH_LAMBDA(std::int64_t i) {
+          return slot[i] < nown ? norm(g.nearest(x[i] - x0[slot[i]])) : 0.0;
+        },
         0.0);
   }
 

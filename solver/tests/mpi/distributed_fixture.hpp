@@ -1,5 +1,6 @@
-// Shared by the tests under mpirun (tests/mpi/): ranks of a communicator, the two scenes the
-// distributed runs are checked on, and the run options they use.
+// Shared by the tests under mpirun (tests/mpi/): ranks of a communicator, the scenes the
+// distributed runs are checked on (bodies, contact, a fluid coupled to a body), and the run
+// options they use.
 #pragma once
 
 #include <mpi.h>
@@ -14,6 +15,8 @@
 #include "model/model.hpp"
 #include "parallel/distributed_backend.hpp"
 #include "parallel/distributed_backend_mpi.hpp"
+#include "sph/fluid_setup.hpp"
+#include "sph/fluid_stage.hpp"
 
 namespace qdemsph::mpi_testing {
 
@@ -96,6 +99,59 @@ struct SideBySide {
   static const Model& uploaded(Backend& be, const Model& m) {  // before the Stepper sees it
     be.upload(m);
     return m;
+  }
+};
+
+// A dam break against a free deformable cube resting on a contact wall (the floor), coupled
+// both ways: 3,280 fluid and wall particles, 64 markers in the cube's 27-vertex mesh.
+inline const char* kCoupledScene = R"(
+run: {end_time: 0.1}
+gravity: [0, 0, -9.81]
+materials: {m: {E: 1.0e6, nu: 0.3, density: 500, viscosity: 5}}
+contact: {mu: 0.4, d_dem: 0.004}
+walls: [{point: [0, 0, 0], normal: [0, 0, 1]}]
+bodies:
+  - {name: cube, material: m, mesh: {type: box, origin: [0.23, 0.02, 0.002], size: [0.08, 0.08, 0.08], cells: [2, 2, 2]}}
+fluid:
+  spacing: 0.02
+  couple_bodies: true
+  blocks: [{min: [0, 0, 0], max: [0.2, 0.12, 0.2]}]
+  tanks: [{min: [0, 0, 0], max: [0.5, 0.12, 0.3], thickness_layers: 2}]
+)";
+
+// The fluid of a coupled scene, with its body markers.
+inline FluidSetup coupled_fluid(const Problem& r) {
+  FluidSetup f = build_fluid(r.scene.fluid, r.scene.gravity);
+  add_solid_markers(f, r.model);
+  return f;
+}
+
+// A coupled scene's bodies, fluid and Stepper, the solid stepped twice per fluid step (the
+// coupling force held over the sub-steps): on one rank (comm = MPI_COMM_NULL) or over `comm`,
+// both partitions cut again every 25 steps (threshold 0).
+struct CoupledRun {
+  static constexpr double kStep = 2.0e-4;  // the fluid step (below its CFL limit, 2.6e-4 s)
+  static constexpr int kSubsteps = 2;
+  std::unique_ptr<Backend> be;
+  DistributedBackend* dist = nullptr;  // be, when distributed
+  SolidViews solid;
+  std::unique_ptr<FluidStage> fluid;
+  std::unique_ptr<Stepper> st;
+  CoupledRun(const Model& m, const FluidSetup& f, MPI_Comm comm = MPI_COMM_NULL) {
+    std::unique_ptr<FluidExchange> ex;
+    if (comm == MPI_COMM_NULL) {
+      be = make_host_backend();
+    } else {
+      auto d = make_distributed_backend(comm, make_host_backend(), options(25, 0.0));
+      dist = d.get();
+      be = std::move(d);
+      ex = make_fluid_exchange(comm, options(25, 0.0), f);
+    }
+    be->upload(m);
+    solid = be->solid_views();
+    fluid = make_fluid_stage("cpu", f, &solid, std::move(ex));
+    st = std::make_unique<Stepper>(m, *be, kStep);
+    st->attach_fluid(fluid.get(), kSubsteps);
   }
 };
 

@@ -10,7 +10,12 @@
 //    forces, dissipation and contact history bit for bit (forces are summed in the one-rank
 //    order on any rank count), energies to round-off (sums reduced over ranks);
 //  - the one-rank restart of the P-rank file equals the uninterrupted run bit for bit (the
-//    file holds the force of the last evaluation, so nothing is recomputed).
+//    file holds the force of the last evaluation, so nothing is recomputed);
+//  - a fluid coupled to a body (distributed_fixture.hpp, kCoupledScene): the checkpoint of P
+//    ranks equals the one-rank one (with the fluid's coupling force fc on the body's vertices,
+//    which the next sub-steps add to the forces), and the P-rank and one-rank files restarted
+//    on P, P/2 and 1 ranks continue bit for bit as the uninterrupted one-rank run (fluid and
+//    body).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -20,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "core/error.hpp"
 #include "distributed_fixture.hpp"
 #include "integrate/restart.hpp"
 #include "integrate/stepper.hpp"
@@ -198,5 +204,140 @@ TEST(DistributedCheckpoint, WrittenOnAnyRanksRestartsOnAnyRanks) {
           c.written_on, c.ranks, dx, de, dd, static_cast<long>(dist->rebalances()));
     }
     MPI_Comm_free(&sub);
+  }
+}
+
+namespace {
+
+// Every field of two fluid states, bit for bit.
+void expect_same_fluid(const FluidState& a, const FluidState& b, const std::string& what) {
+  EXPECT_EQ(a.gid, b.gid) << what << ": particle order differs";
+  EXPECT_EQ(a.type, b.type) << what;
+  EXPECT_TRUE(same_bits(a.x, b.x)) << what << ": fluid positions differ";
+  EXPECT_TRUE(same_bits(a.v, b.v)) << what << ": fluid velocities differ";
+  EXPECT_TRUE(same_bits(a.a, b.a)) << what << ": fluid accelerations differ";
+  EXPECT_TRUE(same_bits(a.rho, b.rho)) << what << ": fluid densities differ";
+  EXPECT_TRUE(same_bits(a.p, b.p)) << what << ": fluid pressures differ";
+  EXPECT_TRUE(same_bits(a.m, b.m)) << what << ": fluid masses differ";
+}
+
+// The body's state of a coupled run (no contact history in the comparison: the cube rests on
+// a wall, whose entries expect_same_state compares).
+double expect_same_body(const BackendState& a, const BackendState& b, const std::string& what) {
+  EXPECT_TRUE(same_bits(a.fc, b.fc)) << what << ": coupling forces differ";
+  return expect_same_state(a, b, true, what);
+}
+
+}  // namespace
+
+TEST(DistributedCheckpoint, CoupledFluidRestartsOnAnyRanksExactly) {
+  constexpr int kFluidBefore = 150, kFluidAfter = 100;  // fluid steps (2 solid sub-steps each)
+  const Problem r = load(kCoupledScene);
+  const FluidSetup f = coupled_fluid(r);
+  const double dt = CoupledRun::kStep;
+  const int p = size_of(), me = rank_of();
+  const fs::path dir =
+      qdemsph::testing::scratch_dir("mpi_coupled_checkpoint_np" + std::to_string(p));
+  const fs::path one_file = dir / "one_rank.h5", all_file = dir / "all_ranks.h5";
+  auto capture = [&](CoupledRun& c) {
+    return capture_checkpoint(r.scene, r.model, dt, *c.be, c.fluid.get(), &f, *c.st);
+  };
+
+  // One rank, uninterrupted (on every rank: each compares its own restarts against it).
+  CoupledRun straight(r.model, f);
+  run(*straight.st, kFluidBefore);
+  const Checkpoint one = capture(straight);
+  run(*straight.st, kFluidAfter);
+  const BackendState want = straight.be->save_state();
+  const FluidState want_fluid = straight.fluid->save_state();
+  Checkpoint all;
+  {
+    CoupledRun many(r.model, f, MPI_COMM_WORLD);
+    run(*many.st, kFluidBefore);
+    all = capture(many);
+  }
+  if (me == 0) {
+    write_checkpoint(one_file, one);
+    write_checkpoint(all_file, all);
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  const Checkpoint a = read_checkpoint(one_file), b = read_checkpoint(all_file);
+  ASSERT_EQ(b.solid.fc.size(), r.model.x.size());
+  double fc = 0;
+  for (const Vec3& v : b.solid.fc) fc = std::max(fc, norm(v));
+  EXPECT_GT(fc, 0.0) << "the water does not push the cube at the checkpoint";
+  expect_same_body(a.solid, b.solid, "one-rank vs all-rank checkpoint");
+  ASSERT_TRUE(a.fluid && b.fluid);
+  expect_same_fluid(*a.fluid, *b.fluid, "one-rank vs all-rank checkpoint");
+
+  // The one-rank restart of the P-rank file equals the uninterrupted run.
+  {
+    CoupledRun re(r.model, f);
+    restore_checkpoint(b, all_file.string(), r.scene, r.model, dt, *re.be, re.fluid.get(), &f,
+                       *re.st);
+    run(*re.st, kFluidAfter);
+    const double dx = expect_same_body(want, re.be->save_state(), "one-rank restart");
+    expect_same_fluid(want_fluid, re.fluid->save_state(), "one-rank restart");
+    if (me == 0)
+      std::printf(
+          "[coupled checkpoint, %d ranks] one-rank restart: max |dx| = %.3e m, max |fc| "
+          "= %.3e N at the checkpoint\n",
+          p, dx, fc);
+  }
+
+  struct Restart {
+    const Checkpoint* c;
+    fs::path file;
+    int written_on, ranks;
+  };
+  std::vector<Restart> cases{{&b, all_file, p, p}};
+  for (int m : {p / 2, 1})
+    if (m >= 1 && m != cases.back().ranks) cases.push_back({&b, all_file, p, m});
+  if (p > 1) cases.push_back({&a, one_file, 1, p});
+  for (const Restart& c : cases) {
+    SCOPED_TRACE(std::to_string(c.written_on) + " -> " + std::to_string(c.ranks) + " ranks");
+    MPI_Comm sub;
+    MPI_Comm_split(MPI_COMM_WORLD, me < c.ranks ? 0 : MPI_UNDEFINED, me, &sub);
+    if (sub == MPI_COMM_NULL) continue;
+    {
+      CoupledRun re(r.model, f, sub);
+      restore_checkpoint(*c.c, c.file.string(), r.scene, r.model, dt, *re.be, re.fluid.get(), &f,
+                         *re.st);
+      run(*re.st, kFluidAfter);
+      const BackendState got = re.be->save_state();  // collective: on rank 0 of `sub`
+      const FluidState got_fluid = re.fluid->save_state();
+      if (rank_of(sub) == 0) {
+        EXPECT_EQ(re.st->steps(), straight.st->steps());
+        EXPECT_EQ(re.st->time(), straight.st->time());
+        const double dx = expect_same_body(want, got, "restart vs the uninterrupted run");
+        expect_same_fluid(want_fluid, got_fluid, "restart vs the uninterrupted run");
+        std::printf(
+            "[coupled checkpoint %d -> %d ranks] cube max |dx| = %.3e m, fluid max |dx| = %.3e "
+            "m, %ld body rebalances\n",
+            c.written_on, c.ranks, dx, max_diff(want_fluid.x, got_fluid.x),
+            static_cast<long>(re.dist->rebalances()));
+      }
+    }
+    MPI_Comm_free(&sub);
+  }
+}
+
+// A coupled checkpoint without the coupling force (written before it was stored) is refused
+// with a message, not continued inexactly.
+TEST(DistributedCheckpoint, CoupledCheckpointWithoutCouplingForceIsRefused) {
+  const Problem r = load(kCoupledScene);
+  const FluidSetup f = coupled_fluid(r);
+  CoupledRun c(r.model, f);
+  run(*c.st, 2);
+  Checkpoint old =
+      capture_checkpoint(r.scene, r.model, CoupledRun::kStep, *c.be, c.fluid.get(), &f, *c.st);
+  old.solid.fc.clear();
+  CoupledRun re(r.model, f);
+  try {
+    restore_checkpoint(old, "old.h5", r.scene, r.model, CoupledRun::kStep, *re.be, re.fluid.get(),
+                       &f, *re.st);
+    ADD_FAILURE() << "a coupled checkpoint without /solid/fc was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("coupling force"), std::string::npos) << e.what();
   }
 }

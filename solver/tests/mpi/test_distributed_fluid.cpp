@@ -12,7 +12,11 @@
 //    is the one-rank file); restarting N ranks from a one-rank state continues exactly;
 //  - a dam break coupled to a free cube (markers in the fluid's exchange, every marker's force
 //    summed over the ranks and gathered to the cube's vertices in the one-rank order) equals
-//    one rank bit for bit.
+//    one rank bit for bit;
+//  - a slab periodic in z (fluid.periodic_z: the ghost band wraps across the seam) equals one
+//    rank bit for bit, with one band cell across the period and with six;
+//  - the exchange's traffic (summary.json `parallel`: fluid_halo_bytes_per_step,
+//    fluid_migrated_bytes) is what its plans send: ghosts x bytes per ghost x refreshes.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -24,6 +28,7 @@
 #include "distributed_fixture.hpp"
 #include "integrate/stepper.hpp"
 #include "parallel/fluid_exchange.hpp"
+#include "parallel/parallel_record.hpp"
 #include "sph/fluid_setup.hpp"
 #include "sph/fluid_stage.hpp"
 
@@ -52,9 +57,8 @@ FluidSetup dam_setup() {
 std::unique_ptr<FluidStage> distributed_stage(const FluidSetup& f,
                                               const std::string& curve = "hilbert",
                                               long rebalance_every = 50) {
-  return make_fluid_stage(
-      "cpu", f, nullptr,
-      make_fluid_exchange(options(rebalance_every, 0.0, curve), f.params.kernel.support()));
+  return make_fluid_stage("cpu", f, nullptr,
+                          make_fluid_exchange(options(rebalance_every, 0.0, curve), f));
 }
 
 void step(FluidStage& s) {
@@ -188,51 +192,21 @@ TEST(DistributedFluid, RestartFromOneRankStateContinuesExactly) {
   }
 }
 
-// A dam break against a free deformable cube resting on a contact wall (the floor), coupled
-// both ways, the solid stepped twice per fluid step (the coupling force held over the
-// sub-steps): the Stepper over a DistributedBackend with a distributed fluid against one
-// rank's, both partitions cut again every 25 steps (threshold 0).
-const char* kCoupledScene = R"(
-run: {end_time: 0.1}
-gravity: [0, 0, -9.81]
-materials: {m: {E: 1.0e6, nu: 0.3, density: 500, viscosity: 5}}
-contact: {mu: 0.4, d_dem: 0.004}
-walls: [{point: [0, 0, 0], normal: [0, 0, 1]}]
-bodies:
-  - {name: cube, material: m, mesh: {type: box, origin: [0.23, 0.02, 0.002], size: [0.08, 0.08, 0.08], cells: [2, 2, 2]}}
-fluid:
-  spacing: 0.02
-  couple_bodies: true
-  blocks: [{min: [0, 0, 0], max: [0.2, 0.12, 0.2]}]
-  tanks: [{min: [0, 0, 0], max: [0.5, 0.12, 0.3], thickness_layers: 2}]
-)";
-
+// The coupled scene (distributed_fixture.hpp, CoupledRun): the Stepper over a DistributedBackend
+// with a distributed fluid against one rank's, both partitions cut again every 25 steps.
 TEST(DistributedFluid, CoupledDamBreakWithCubeEqualsOneRankBitForBit) {
   const Problem r = load(kCoupledScene);
-  FluidSetup f = build_fluid(r.scene.fluid, r.scene.gravity);
-  add_solid_markers(f, r.model);
+  const FluidSetup f = coupled_fluid(r);
   ASSERT_GT(f.n_marker, 0);
-  constexpr int kSubsteps = 2;
   const bool root = rank_of() == 0;
-  std::unique_ptr<Backend> ref_be;
-  std::unique_ptr<FluidStage> ref_fluid;
-  std::unique_ptr<Stepper> ref;
-  SolidViews ref_solid;
-  if (root) {
-    ref_be = make_host_backend();
-    ref_be->upload(r.model);
-    ref_solid = ref_be->solid_views();
-    ref_fluid = make_fluid_stage("cpu", f, &ref_solid);
-    ref = std::make_unique<Stepper>(r.model, *ref_be, kH);
-    ref->attach_fluid(ref_fluid.get(), kSubsteps);
-  }
-  auto be = make_distributed_backend(make_host_backend(), options(25, 0.0));
-  be->upload(r.model);
-  const SolidViews solid = be->solid_views();
-  auto fluid = make_fluid_stage("cpu", f, &solid,
-                                make_fluid_exchange(options(25, 0.0), f.params.kernel.support()));
-  Stepper st(r.model, *be, kH);
-  st.attach_fluid(fluid.get(), kSubsteps);
+  std::unique_ptr<CoupledRun> one = root ? std::make_unique<CoupledRun>(r.model, f) : nullptr;
+  CoupledRun many(r.model, f, MPI_COMM_WORLD);
+  Backend* ref_be = one ? one->be.get() : nullptr;
+  FluidStage* ref_fluid = one ? one->fluid.get() : nullptr;
+  Stepper* ref = one ? one->st.get() : nullptr;
+  Backend* be = many.be.get();
+  FluidStage* fluid = many.fluid.get();
+  Stepper& st = *many.st;
   constexpr int kSteps = 400;
   StateDiff worst;
   double dx = 0, dv = 0, force = 0;
@@ -256,7 +230,7 @@ TEST(DistributedFluid, CoupledDamBreakWithCubeEqualsOneRankBitForBit) {
     dv = std::max(dv, max_diff(ha.v, hb.v));
     force = std::max(force, norm(ref_fluid->stats().force_on_bodies - fb));
   }
-  const std::int64_t rebalances = be->rebalances();
+  const std::int64_t rebalances = many.dist->rebalances();
   if (root) {
     std::printf(
         "[coupled dam break, %d ranks, %ld particles (%ld markers), %d steps] fluid max |dx| = "
@@ -278,5 +252,166 @@ TEST(DistributedFluid, CoupledDamBreakWithCubeEqualsOneRankBitForBit) {
                 moved, static_cast<long>(rebalances));
     EXPECT_GT(moved, 1e-3);
     if (size_of() > 1) EXPECT_GT(rebalances, 0);
+  }
+}
+
+// The traffic of one layout: each rank's contiguous share of the dam break distributed (the
+// particles migrate, the ghosts are filled with every travelling field: x, v, rho, m, type,
+// gid, key), then kRefreshes steps' refreshes as the stage does them (records of x, v; then
+// of rho, p, m twice). The counts come from what the layout holds: a rank's ghosts, its owned
+// particles from other ranks' shares.
+TEST(DistributedFluid, TrafficIsWhatThePlansSend) {
+  const FluidSetup f = dam_setup();
+  const int me = rank_of(), np = size_of();
+  auto ex = make_fluid_exchange(options(50, 0.0), f);
+  const std::int64_t n = f.size(), b = n * me / np, e = n * (me + 1) / np;
+  FluidParticles p;
+  for (std::int64_t i = b; i < e; ++i) {
+    p.x.push_back(f.x[i]), p.v.push_back(f.v[i]), p.rho.push_back(f.rho[i]);
+    p.m.push_back(f.m[i]), p.type.push_back(f.type[i]), p.gid.push_back(f.gid[i]);
+    p.key.push_back(f.gid[i]);
+  }
+  const std::vector<std::uint64_t> share(p.gid.begin(), p.gid.end());
+  const std::int64_t nown = ex->distribute(p);
+  std::int64_t count[2] = {static_cast<std::int64_t>(p.size()) - nown, 0};  // ghosts, arrived
+  for (std::int64_t i = 0; i < nown; ++i)
+    count[1] += std::find(share.begin(), share.end(), p.gid[i]) == share.end();
+  MPI_Allreduce(MPI_IN_PLACE, count, 2, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+  constexpr int kRefreshes = 5;
+  for (int k = 0; k < kRefreshes; ++k)
+    for (std::size_t record : {2 * sizeof(Vec3), 3 * sizeof(double), 3 * sizeof(double)}) {
+      ex->send_buffer(record);  // the bytes depend on the record size only
+      ex->refresh();
+    }
+  const FluidTraffic t = ex->traffic();
+  constexpr std::int64_t kRecord = 2 * sizeof(Vec3) + 2 * sizeof(double) + sizeof(std::uint8_t) +
+                                   2 * sizeof(std::uint64_t);  // 81: the fields that travel
+  constexpr std::int64_t kStep = 2 * sizeof(Vec3) + 2 * 3 * sizeof(double);  // 96
+  const std::int64_t want_halo = count[0] * (kRecord + kRefreshes * kStep);
+  EXPECT_EQ(t.evaluations, 1);
+  EXPECT_EQ(t.rebuilds, 1);
+  EXPECT_EQ(t.halo_bytes, want_halo);
+  EXPECT_EQ(t.migrated_bytes, count[1] * kRecord);
+  ParallelRecord r;
+  r.set_fluid(t);
+  EXPECT_EQ(r.fluid_halo_bytes_per_step, static_cast<double>(want_halo));
+  EXPECT_EQ(r.fluid_migrated_bytes, t.migrated_bytes + t.band_bytes);
+  if (np == 1) {
+    EXPECT_EQ(t.halo_bytes, 0);
+    EXPECT_EQ(t.migrated_bytes + t.band_bytes, 0);
+  } else {
+    EXPECT_GT(count[0], 0);
+    EXPECT_GT(count[1], 0);
+    EXPECT_GT(t.band_bytes, 0);  // (cell key, rank) pairs, each sent to the other ranks
+    EXPECT_EQ(t.band_bytes % (16 * (np - 1)), 0);
+  }
+  if (me == 0)
+    std::printf(
+        "[fluid traffic, %d ranks] %ld ghosts, %ld particles migrated: halo %ld B (%ld x (%ld + "
+        "%d x %ld)), migration %ld B, band cells %ld B\n",
+        np, static_cast<long>(count[0]), static_cast<long>(count[1]),
+        static_cast<long>(t.halo_bytes), static_cast<long>(count[0]), static_cast<long>(kRecord),
+        kRefreshes, static_cast<long>(kStep), static_cast<long>(t.migrated_bytes),
+        static_cast<long>(t.band_bytes));
+}
+
+// The stage's traffic over a run: one evaluation per compute() (the constructor's and one
+// per step), rebuilds by the skin rule and the cuts, and on one rank nothing sent.
+TEST(DistributedFluid, StageTrafficPerEvaluation) {
+  const FluidSetup f = dam_setup();
+  auto ex = make_fluid_exchange(options(50, 0.0), f);
+  FluidExchange* x = ex.get();
+  auto dist = make_fluid_stage("cpu", f, nullptr, std::move(ex));
+  constexpr int kSteps = 120;
+  for (int n = 0; n < kSteps; ++n) step(*dist);
+  const FluidTraffic t = x->traffic();
+  ParallelRecord r;
+  r.set_fluid(t);
+  EXPECT_EQ(t.evaluations, kSteps + 1);
+  EXPECT_GE(t.rebuilds, 1);  // the first layout, then the skin rule and the cuts
+  if (size_of() == 1) {
+    EXPECT_EQ(r.fluid_halo_bytes_per_step, 0.0);
+    EXPECT_EQ(r.fluid_migrated_bytes, 0);
+  } else {
+    EXPECT_GT(r.fluid_halo_bytes_per_step, 0.0);
+    EXPECT_GT(r.fluid_migrated_bytes, 0);
+  }
+  if (rank_of() == 0)
+    std::printf(
+        "[fluid stage traffic, %d ranks, %d steps] %ld rebuilds, halo %.0f B per evaluation, "
+        "migrated %ld B\n",
+        size_of(), kSteps, static_cast<long>(t.rebuilds), r.fluid_halo_bytes_per_step,
+        static_cast<long>(r.fluid_migrated_bytes));
+}
+
+// A dam break in a slab periodic in z (fluid.periodic_z, walls in x and y only, gravity along
+// -y), the fluid given z velocities up to 1 m/s so that particles cross the seam: `layers`
+// particle layers across the period.
+FluidSetup periodic_setup(int layers) {
+  const double z = 0.01 * layers;
+  const std::string zs = std::to_string(z);
+  const Scene s = parse_scene(R"(
+run: {end_time: 0.1, dt: 2.0e-4}
+gravity: [0, -9.81, 0]
+fluid:
+  spacing: 0.01
+  blocks: [{min: [0, 0, 0], max: [0.1, 0.12, )" +
+                                  zs + R"(]}]
+  periodic_z: [0.0, )" + zs + R"(]
+  walls:
+    - {min: [-0.02, -0.02, 0.0], max: [0.0, 0.15, )" +
+                                  zs + R"(]}
+    - {min: [0.0, -0.02, 0.0], max: [0.25, 0.0, )" +
+                                  zs + R"(]}
+    - {min: [0.25, -0.02, 0.0], max: [0.27, 0.15, )" +
+                                  zs + R"(]}
+)",
+                              "periodic.yaml");
+  FluidSetup f = build_fluid(s.fluid, s.gravity);
+  for (std::int64_t i = 0; i < f.size(); ++i)
+    if (f.type[i] == kSphFluid) f.v[i].z = (static_cast<double>(f.gid[i] % 7) - 3.0) / 3.0;
+  return f;
+}
+
+TEST(DistributedFluid, PeriodicSlabEqualsOneRankBitForBit) {
+  // 3 layers: the period (0.03 m) is below the band cell (0.016 m) x 2, one band cell across
+  // it; 10 layers: six band cells, a seam between ranks' pieces.
+  for (int layers : {3, 10}) {
+    SCOPED_TRACE(std::to_string(layers) + " layers");
+    const FluidSetup f = periodic_setup(layers);
+    ASSERT_GT(f.period_z, 0.0);
+    const bool root = rank_of() == 0;
+    auto ref = root ? make_fluid_stage("cpu", f) : nullptr;
+    auto ex = make_fluid_exchange(options(25, 0.0), f);
+    FluidExchange* x = ex.get();
+    auto dist = make_fluid_stage("cpu", f, nullptr, std::move(ex));
+    constexpr int kSteps = 100;
+    StateDiff worst;
+    int bad_ids = 0, outside = 0;
+    for (int n = 1; n <= kSteps; ++n) {
+      if (ref) step(*ref);
+      step(*dist);
+      if (n % 20 != 0) continue;
+      const FluidState b = dist->save_state();
+      if (!root) continue;
+      bad_ids += !each_id_once(b, f.size());
+      for (const Vec3& p : b.x) outside += p.z < f.z0 || p.z >= f.z0 + f.period_z;
+      const StateDiff d = diff(ref->save_state(), b);
+      EXPECT_TRUE(d.same_order) << "step " << n;
+      worst.x = std::max(worst.x, d.x), worst.v = std::max(worst.v, d.v);
+      worst.a = std::max(worst.a, d.a), worst.rho = std::max(worst.rho, d.rho);
+      worst.p = std::max(worst.p, d.p), worst.m = std::max(worst.m, d.m);
+    }
+    const FluidTraffic t = x->traffic();
+    if (root) {
+      std::printf(
+          "[periodic slab, %d layers, %d ranks, %ld particles, %d steps] max |dx| = %.3e m, "
+          "|dv| = %.3e m/s, |drho| = %.3e, |dp| = %.3e Pa; %ld layout rebuilds\n",
+          layers, size_of(), static_cast<long>(f.size()), kSteps, worst.x, worst.v, worst.rho,
+          worst.p, static_cast<long>(t.rebuilds));
+      EXPECT_EQ(bad_ids, 0);
+      EXPECT_EQ(outside, 0) << "a particle outside the period";
+      EXPECT_EQ(worst.max(), 0.0);
+    }
   }
 }

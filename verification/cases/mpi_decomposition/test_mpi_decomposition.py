@@ -15,8 +15,8 @@ from harness.qdemsph import mpirun_command
 
 HERE = Path(__file__).resolve().parent
 PARALLEL_KEYS = {"ranks", "curve", "rebalances", "imbalance", "imbalance_initial", "migrated_bytes",
-                 "halo_bytes_per_step", "owned_vertices", "owned_tets", "phases_max", "phases_mean",
-                 "rebalance_log"}
+                 "halo_bytes_per_step", "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "owned_vertices",
+                 "owned_tets", "phases_max", "phases_mean", "rebalance_log"}
 PHASES = {"elements", "integration", "contact", "sph", "halo", "migration", "balance", "output"}
 # Rebalance (and migrate) at every measurement so that the run crosses many decompositions.
 REBALANCE = ["parallel.rebalance_every=25", "parallel.rebalance_threshold=0"]
@@ -230,5 +230,11 @@ def test_fluid_same_as_one_rank(qdemsph, checks, case_out):
     d, n = frames_diff(one.out, run.out)
     checks.check("fluid.restart_np2.fluid_h5_max_diff", d, kind="max", tolerance=0.0,
                  note="a one-rank checkpoint of step 50 continued on 2 ranks: every frame as the uninterrupted run")
+    p1, p2 = one.summary["parallel"], two.summary["parallel"]
+    checks.check("fluid.np1.fluid_bytes", p1["fluid_halo_bytes_per_step"] + p1["fluid_migrated_bytes"], kind="max",
+                 tolerance=0, unit="B", note="one process sends nothing")
+    checks.check("fluid.np2.fluid_halo_bytes_per_step", p2["fluid_halo_bytes_per_step"], kind="min", tolerance=1.0,
+                 unit="B", note="the fluid's ghost fill and refreshes per fluid evaluation, all ranks (docs/parallel.md)")
+    checks.check("fluid.np2.fluid_migrated_bytes", p2["fluid_migrated_bytes"], kind="min", tolerance=1.0, unit="B")
     checks.info("fluid.np2.wall", two.solver_wall_s, unit="s", wall_s=two.solver_wall_s)
     checks.require()

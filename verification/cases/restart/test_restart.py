@@ -1,6 +1,7 @@
 """Checkpoint/restart through the binary (`output.checkpoint`, `qdemsph run --restart`).
 
-1. Bit-identical continuation (CPU backend): for an element-only, a contact and an SPH scene,
+1. Bit-identical continuation (CPU backend): for an element-only, a contact, an SPH scene and
+   an SPH scene coupled to a body (the checkpoint holds the fluid's force on the body, fc),
    one uninterrupted run against a run stopped half-way (its own end_time, so it also wrote
    final rows and frames past the checkpoint) and continued with `--restart latest`.
    probes.csv, fluid.csv and the XDMF indexes must be byte-identical, every fields.h5 and
@@ -61,7 +62,7 @@ def identical_frames(a, b):
     return bad
 
 
-@pytest.mark.parametrize("scene", ["beam", "contact", "dam"])
+@pytest.mark.parametrize("scene", ["beam", "contact", "dam", "coupled"])
 def test_restart_is_bit_identical(qdemsph, checks, case_out, scene):
     path = HERE / f"scene_{scene}.yaml"
     log = case_out / "harness.log"
@@ -69,7 +70,8 @@ def test_restart_is_bit_identical(qdemsph, checks, case_out, scene):
     t0 = time.time()
     p = run(qdemsph, path, full, log=log)
     assert p.returncode == 0, p.stderr
-    end = {"beam": 0.02, "contact": 0.02, "dam": 0.03}[scene]
+    end = {"beam": 0.02, "contact": 0.02, "dam": 0.03, "coupled": 0.03}[scene]
+    fluid = scene in ("dam", "coupled")
     every = "every_steps: 10"
     p = run(qdemsph, path, part, sets=[f"run.end_time={end / 2}", f"output.checkpoint={{{every}, keep: 2}}"],
             log=log)
@@ -84,7 +86,7 @@ def test_restart_is_bit_identical(qdemsph, checks, case_out, scene):
     checks.info("restart_step", restarted, unit="step", note=f"first run stopped at step {stop_steps} of {sf['steps']}")
     checks.check("restarted_mid_run", 1.0 if 0 < restarted < sf["steps"] else 0.0, kind="min", tolerance=1.0,
                  unit="bool", note=f"restarted from step {restarted}")
-    texts = ["probes.csv", "fields.xdmf"] + (["fluid.csv", "fluid.xdmf"] if scene == "dam" else [])
+    texts = ["probes.csv", "fields.xdmf"] + (["fluid.csv", "fluid.xdmf"] if fluid else [])
     for name in texts:
         same = (full / name).read_bytes() == (part / name).read_bytes()
         checks.check(f"{name}_identical", 1.0 if same else 0.0, kind="min", tolerance=1.0, unit="bool",
@@ -93,7 +95,7 @@ def test_restart_is_bit_identical(qdemsph, checks, case_out, scene):
     fb = frames(part / "fields.h5", ["position", "velocity", "stress"])
     checks.check("field_frames_differing", identical_frames(fa, fb), kind="abs", reference=0, tolerance=0,
                  unit="frames", note=f"{len(fa)} frames")
-    if scene == "dam":
+    if fluid:
         ga = frames(full / "fluid.h5", ["position", "velocity", "density", "id"])
         gb = frames(part / "fluid.h5", ["position", "velocity", "density", "id"])
         checks.check("fluid_frames_differing", identical_frames(ga, gb), kind="abs", reference=0, tolerance=0,
