@@ -23,6 +23,7 @@ YADE = REPO / "references" / "yade" / "results"
 sys.path.insert(0, str(HERE))
 import make_yade_chain  # noqa: E402  (the scene's parameters: N, PITCH, TILT0, OMEGA0, TOP_Z)
 from chain_analysis import FRONT_TILT, chain_tilts, front_speed  # noqa: E402
+import rigid_chain  # noqa: E402  (the rigid-body reference)
 
 FIT = (10, 38)  # YADE's front-speed window for 40 pieces (pieces n/4 .. n-2)
 WINDOWS = {"5_18": (5, 18), "5_35": (5, 35)}  # the 20-piece variants' window; the brief's
@@ -37,8 +38,16 @@ GPU_RUNS_K01 = REPO / "references" / "benchmarks" / "gpu" / "2026-11-25_h100_cha
 GPU_VARIANTS = {"c40": "40 pieces, 6 mm mesh", "c20_E4": "20 pieces, 6 mm, 4 x E",
                 "c20_mu03": "20 pieces, 6 mm, piece-piece mu 0.3", "f20_4": "20 pieces, 4 mm mesh",
                 "f20_3": "20 pieces, 3 mm mesh"}
-
-
+# Rigid-body reference (rigid_chain.py; stored runs references/rigid/results, README.md
+# "Rigid-body reference"). Pendulum: one piece released at rest at 25 deg (balance 20.4 deg)
+# pivots on its front bottom edge to 45 deg; the time against the rigid pendulum's ODE within
+# 5e-4 at the chain's k 1e5 N/m (penalty pivot: 5e-4 at 1e4, 8e-5 at 1e5).
+PEND = (25.0, 45.0)
+PEND_K = (1e4, 1e5)
+TOL_PEND = 5e-4
+# Energy at mu 0, e 1 (3 pieces, 0.3 s, k 2.5e4 N/m): drift of kinetic + gravity + contact
+# springs within 1e-3 m g H (measured 3e-4 at the stored runs' 40 steps per contact period).
+TOL_ENERGY = 1e-3
 def yade(tag):
     return json.loads((YADE / f"shogi_chain_{tag}.provenance.json").read_text())
 
@@ -191,3 +200,63 @@ def test_chain_vs_yade(qdemsph, checks, case_out):
     for b in range(0, make_yade_chain.N, 5):
         checks.series("yade_shogi_chain_tilts", f"qdemsph piece {b}", t[::k], tilts[b][::k], style="line", **meta)
     checks.require()
+
+
+def test_rigid_mass_properties(checks):
+    """The rigid reference's piece: mass, centre height and inertia about the width axis (a
+    planar integration over the height) against the tetrahedra of the exact polyhedron
+    (yade_shogi_leaning/rigid_ladder.py) and YADE's mass."""
+    sys.path.insert(0, str(HERE.parent / "yade_shogi_leaning"))
+    import rigid_ladder
+    for name, v, ref in (("mass", rigid_chain.M, rigid_ladder.M), ("zc", rigid_chain.ZC, rigid_ladder.ZC),
+                         ("inertia", rigid_chain.I, rigid_ladder.I)):
+        checks.check(f"rigid.{name}", v, kind="rel", reference=ref, tolerance=1e-9, unit="SI",
+                     note="against rigid_ladder.mass_properties (polyhedron tetrahedra)")
+    checks.check("rigid.mass_vs_yade", rigid_chain.M, kind="rel", reference=yade("n40")["params"]["mass_kg"],
+                 tolerance=1e-9, unit="kg")
+    checks.require()
+
+
+def pendulum_error(k, inertia=None):
+    c = rigid_chain.Chain(1, mu=0.5, e=1.0, k=k, tilt0=PEND[0], omega0=0.0, inertia=inertia)
+    r = c.run(0.2, tail=0.0, levels=(PEND[1],))
+    return r["fall_time_s"][0] / rigid_chain.pendulum_time(*PEND)[0] - 1.0
+
+
+def test_rigid_pendulum(checks):
+    """One piece of the rigid model released at rest at 25 deg pivots on its front bottom edge:
+    its time to 45 deg against the rigid pendulum (ODE about the fixed edge, rtol 1e-12) as the
+    penalty stiffness grows. Negative control: 2 % more inertia in the model (1 % in time) must
+    fail the tolerance."""
+    ref, ratio = rigid_chain.pendulum_time(*PEND)
+    checks.info("rigid.pendulum.t45_ode", ref, unit="s",
+                note=f"largest friction ratio needed on the way {ratio:.3f} (< mu 0.5: no slip)")
+    err = {k: pendulum_error(k) for k in PEND_K}
+    for k in PEND_K[:-1]:
+        checks.info(f"rigid.pendulum.error_k{k:g}", err[k], unit="-")
+    checks.check(f"rigid.pendulum.error_k{PEND_K[-1]:g}", abs(err[PEND_K[-1]]), kind="max", tolerance=TOL_PEND,
+                 unit="-", note="relative time error at the stored runs' k")
+    checks.check("rigid.pendulum.error_falls_with_k", abs(err[PEND_K[-1]]) / abs(err[PEND_K[0]]), kind="max",
+                 tolerance=0.5, unit="-", note="10 x k")
+    wrong = pendulum_error(PEND_K[-1], inertia=1.02 * rigid_chain.I)
+    checks.check("rigid.pendulum.control_inertia_x1.02", abs(wrong), kind="min", tolerance=TOL_PEND, unit="-",
+                  note="a 2 % inertia error must be caught")
+    checks.require()
+
+
+def test_rigid_energy(checks):
+    """Frictionless, undamped (mu 0, e 1): three pieces for 0.3 s (piece 0 pushed into piece 1,
+    impacts, sliding on the floor); kinetic + gravity + contact-spring energy stays within
+    TOL_ENERGY m g H of its start."""
+    c = rigid_chain.Chain(3, mu=0.0, e=1.0, k=2.5e4)
+    r = c.run(0.3, record_every=1e-3, stop_when_fallen=False)
+    e = r["energy"]
+    scale = rigid_chain.M * rigid_chain.G * rigid_chain.H
+    spin = 0.5 * (rigid_chain.I + rigid_chain.M * float(rigid_chain.FOOT @ rigid_chain.FOOT)) * rigid_chain.OMEGA0 ** 2
+    checks.check("rigid.energy.max_drift", float(np.max(np.abs(e - e[0]))) / scale, kind="max",
+                 tolerance=TOL_ENERGY, unit="m g H", note=f"m g H = {scale:.4e} J; piece 0's initial spin about "
+                 f"its edge {spin:.2e} J")
+    checks.check("rigid.energy.contact_active", float(np.max(r["tilt_deg"][:, 1])), kind="min", tolerance=1.0,
+                 unit="deg", note="piece 1 was pushed (the contacts were exercised)")
+    checks.require()
+
