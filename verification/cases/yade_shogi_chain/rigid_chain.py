@@ -35,7 +35,7 @@ bottom corner); piece 0 pivots on its front bottom corner, sunk by mg/k.
   Chain(...).run(...)        the simulation; returns fall times (tilt 45 deg), histories, energy
   front_speed(fall, lo, hi)  least-squares slope (chain_analysis.front_speed)
 
-Run (regenerates references/rigid/results: 13 runs, 2,010 s on a loaded 2-core machine):
+Run (regenerates references/rigid/results: 14 runs, 2,224 s on a loaded 2-core machine):
     /usr/bin/python3 verification/cases/yade_shogi_chain/rigid_chain.py --all
 or one run: rigid_chain.py --n 20 --mu 0.5 --e 1 --k 1e5 [--out DIR --tag NAME].
 """
@@ -343,6 +343,7 @@ for _e, _w in ((0.3, OMEGA0), (1.0, 20.0)):
 # Undamped, k 1e5 lies ~4 % above k / 4, 4 k and 16 k (bouncing contacts scatter the front):
 # 16 k shows the limit (4 k to 16 k: -0.7 %).
 RUNS["n20_mu0.5_e1_w20_k1.6e6"] = (20, 0.5, 1.0, 1.6e6, STEPS_PER_PERIOD, 20.0)
+RUNS["n40_mu0.5_e1_w20_k4e5"] = (40, 0.5, 1.0, 4e5, STEPS_PER_PERIOD, 20.0)  # YADE n40's like for like
 # Undamped at mu 0.3 the start stalls at 20 rad/s (pieces 0-2 come to rest leaning, 38 and 23
 # deg; 5 pieces, 0.5 s: 16 rad/s starts the chain, 25 stalls, 30 topples piece 0 only).
 del RUNS["n20_mu0.3_e1_w20_k1e5"]
