@@ -4,7 +4,7 @@
 #   make run-fsi    a fluid-structure demo (SCENE=dambreak_cubes|debris_flow, RUN_ARGS=...)
 #   make test       unit tests + the quick tier of the verification suite
 #   make verify     the verification suite (FULL=1: the long tier)
-#   make references regenerate the stored FEniCSx and YADE reference results
+#   make references regenerate the stored FEniCSx, YADE and rigid-body reference results
 #   make sanitize   unit tests under ASan+UBSan (all; FILTER=... for some)
 #   make fuzz       libFuzzer targets for the scene parser and mesh reader (FUZZ_SECONDS each)
 BUILD ?= build
@@ -42,6 +42,7 @@ test: unit verify
 references: build
 	@bash references/fenicsx/make_references.sh $(BUILD)/bin/qdemsph
 	@bash references/yade/run_all.sh
+	@$(PY) verification/cases/yade_shogi_chain/rigid_chain.py --all
 
 sanitize: deps
 	@bash ci/sanitize.sh $(FILTER)

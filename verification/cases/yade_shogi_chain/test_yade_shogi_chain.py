@@ -23,6 +23,7 @@ YADE = REPO / "references" / "yade" / "results"
 sys.path.insert(0, str(HERE))
 import make_yade_chain  # noqa: E402  (the scene's parameters: N, PITCH, TILT0, OMEGA0, TOP_Z)
 from chain_analysis import FRONT_TILT, chain_tilts, front_speed  # noqa: E402
+import rigid_chain  # noqa: E402  (the rigid-body reference)
 
 FIT = (10, 38)  # YADE's front-speed window for 40 pieces (pieces n/4 .. n-2)
 WINDOWS = {"5_18": (5, 18), "5_35": (5, 35)}  # the 20-piece variants' window; the brief's
@@ -37,6 +38,40 @@ GPU_RUNS_K01 = REPO / "references" / "benchmarks" / "gpu" / "2026-11-25_h100_cha
 GPU_VARIANTS = {"c40": "40 pieces, 6 mm mesh", "c20_E4": "20 pieces, 6 mm, 4 x E",
                 "c20_mu03": "20 pieces, 6 mm, piece-piece mu 0.3", "f20_4": "20 pieces, 4 mm mesh",
                 "f20_3": "20 pieces, 3 mm mesh"}
+# Rigid-body reference (rigid_chain.py; stored runs references/rigid/results, README.md
+# "Rigid-body reference"). Pendulum: one piece released at rest at 25 deg (balance 20.4 deg)
+# pivots on its front bottom edge to 45 deg; the time against the rigid pendulum's ODE within
+# 5e-4 at the chain's k 1e5 N/m (penalty pivot: 5e-4 at 1e4, 8e-5 at 1e5).
+RIGID = REPO / "references" / "rigid" / "results"
+PEND = (25.0, 45.0)
+PEND_K = (1e4, 1e5)
+TOL_PEND = 5e-4
+# Energy at mu 0, e 1 (3 pieces, 0.3 s, k 2.5e4 N/m): drift of kinetic + gravity + contact
+# springs within 1e-3 m g H (measured 3e-4 at the stored runs' 40 steps per contact period).
+TOL_ENERGY = 1e-3
+# Convergence of the stored 20-piece front speed (pieces 5..18): (run, against, tolerance,
+# what). Restitution 0.3: 4 x k and dt / 2 within 2 % of k 1e5 N/m, 40 steps per contact
+# period (measured 0.1 %). Undamped: k 4e5 -> 1.6e6 within 2 % (measured -0.7 %), dt / 2 at
+# k 1e5 within 2 % (-0.4 %); the undamped k 1e5 run lies 3.9 % above the 1.6e6 one (bouncing
+# contacts scatter the undamped front; k 2.5e4 and 4e5 lie within 1 % of 1.6e6): within 5 %.
+# The undamped 40-piece chain (pieces 10..38): k 4e5 within 2 % of 1e5 (measured -1.0 %).
+RIGID_CONVERGENCE = (("n20_mu0.5_e0.3_w12_k4e5", "n20_mu0.5_e0.3_w12_k1e5", 0.02, "4 x k"),
+                     ("n20_mu0.5_e0.3_w12_k1e5_dt2", "n20_mu0.5_e0.3_w12_k1e5", 0.02, "dt / 2"),
+                     ("n20_mu0.5_e1_w20_k1.6e6", "n20_mu0.5_e1_w20_k4e5", 0.02, "undamped, 4 x k"),
+                     ("n20_mu0.5_e1_w20_k1e5_dt2", "n20_mu0.5_e1_w20_k1e5", 0.02, "undamped, dt / 2"),
+                     ("n20_mu0.5_e1_w20_k1e5", "n20_mu0.5_e1_w20_k1.6e6", 0.05, "undamped, k / 16"),
+                     ("n40_mu0.5_e1_w20_k4e5", "n40_mu0.5_e1_w20_k1e5", 0.02, "undamped, 40 pieces, 4 x k"))
+# qdemsph's recorded GPU runs against the rigid front speed of the same restitution: +-15 %
+# (README.md, "Rigid-body reference": the reference's spread, the contact damping laws' and
+# the 6 mm mesh's differences). (rigid run, qdemsph run, checked)
+TOL_VS_RIGID = 0.15
+RIGID_VS_QDEMSPH = (("n40_mu0.5_e0.3_w12_k1e5", "c40", True), ("n20_mu0.5_e0.3_w12_k1e5", "c20", False),
+                    ("n20_mu0.3_e0.3_w12_k1e5", "c20_mu03all", False), ("n20_mu0.5_e1_w20_k1.6e6", "c20_e1", True),
+                    ("n20_mu0.3_e1_w16_k1e5", "c20_e1_mu03all", False), ("n40_mu0.5_e1_w20_k4e5", None, False))
+
+
+def rigid(name):
+    return json.loads((RIGID / f"rigid_chain_{name}.provenance.json").read_text())
 
 
 def yade(tag):
@@ -157,6 +192,10 @@ def test_chain_vs_yade(qdemsph, checks, case_out):
     ref = base["results"]["front_speed_m_per_s"]
     checks.check("chain.front_speed", speed, kind="rel", reference=ref, tolerance=TOL_SPEED, unit="m/s",
                  wall_s=wall, note="pieces 10..38 (YADE's window); YADE young 1e7 0.4576 m/s")
+    rig = rigid(RIGID_VS_QDEMSPH[0][0])["results"]
+    checks.check("chain.front_speed_vs_rigid", speed, kind="rel", reference=rig["front_speed_m_per_s"],
+                 tolerance=TOL_VS_RIGID, unit="m/s", wall_s=wall,
+                 note="pieces 10..38; rigid-body reference at the scene's restitution 0.3 and push (README.md)")
     if speed is not None:
         checks.info("chain.front_speed_over_sqrt_gh", speed / math.sqrt(9.81 * 0.032), unit="-",
                     note="YADE 0.817")
@@ -185,9 +224,126 @@ def test_chain_vs_yade(qdemsph, checks, case_out):
                        ("n20_stiff16", "YADE 16 x young, omega0 12"), ("n20_dt2x", "YADE 2 x dt, omega0 5")):
         f = [float("nan") if v is None else v for v in yade(tag)["results"]["fall_time_s"]]
         checks.series("yade_shogi_chain_fall_times", label, range(len(f)), f, style="points", **meta)
+    f = [float("nan") if v is None else v for v in rig["fall_time_s"]]
+    checks.series("yade_shogi_chain_fall_times", "rigid body, e 0.3, omega0 12", range(len(f)), f, style="points",
+                  **meta)
     meta = dict(title="40-piece shogi chain: tilt of every fifth piece, qdemsph", xlabel="t (s)",
                 ylabel="tilt (deg)")
     k = max(1, len(t) // 800)
     for b in range(0, make_yade_chain.N, 5):
         checks.series("yade_shogi_chain_tilts", f"qdemsph piece {b}", t[::k], tilts[b][::k], style="line", **meta)
+    checks.require()
+
+
+def test_rigid_mass_properties(checks):
+    """The rigid reference's piece: mass, centre height and inertia about the width axis (a
+    planar integration over the height) against the tetrahedra of the exact polyhedron
+    (yade_shogi_leaning/rigid_ladder.py) and YADE's mass."""
+    sys.path.insert(0, str(HERE.parent / "yade_shogi_leaning"))
+    import rigid_ladder
+    for name, v, ref in (("mass", rigid_chain.M, rigid_ladder.M), ("zc", rigid_chain.ZC, rigid_ladder.ZC),
+                         ("inertia", rigid_chain.I, rigid_ladder.I)):
+        checks.check(f"rigid.{name}", v, kind="rel", reference=ref, tolerance=1e-9, unit="SI",
+                     note="against rigid_ladder.mass_properties (polyhedron tetrahedra)")
+    checks.check("rigid.mass_vs_yade", rigid_chain.M, kind="rel", reference=yade("n40")["params"]["mass_kg"],
+                 tolerance=1e-9, unit="kg")
+    checks.require()
+
+
+def polyhedron_inertia():
+    """The piece's inertia from the polyhedron's tetrahedra (rigid_ladder.py), independent of
+    rigid_chain.mass_properties."""
+    sys.path.insert(0, str(HERE.parent / "yade_shogi_leaning"))
+    import rigid_ladder
+    return rigid_ladder.I
+
+
+def pendulum_error(k, inertia=None):
+    c = rigid_chain.Chain(1, mu=0.5, e=1.0, k=k, tilt0=PEND[0], omega0=0.0, inertia=inertia)
+    r = c.run(0.2, tail=0.0, levels=(PEND[1],))
+    return r["fall_time_s"][0] / rigid_chain.pendulum_time(*PEND, inertia=polyhedron_inertia())[0] - 1.0
+
+
+def test_rigid_pendulum(checks):
+    """One piece of the rigid model released at rest at 25 deg pivots on its front bottom edge:
+    its time to 45 deg against the rigid pendulum (ODE about the fixed edge, rtol 1e-12, with
+    the polyhedron's inertia) as the penalty stiffness grows. Negative control: 2 % more
+    inertia in the model (1 % in time) must fail the tolerance."""
+    ref, ratio = rigid_chain.pendulum_time(*PEND, inertia=polyhedron_inertia())
+    checks.info("rigid.pendulum.t45_ode", ref, unit="s",
+                note=f"largest friction ratio needed on the way {ratio:.3f} (< mu 0.5: no slip)")
+    err = {k: pendulum_error(k) for k in PEND_K}
+    for k in PEND_K[:-1]:
+        checks.info(f"rigid.pendulum.error_k{k:g}", err[k], unit="-")
+    checks.check(f"rigid.pendulum.error_k{PEND_K[-1]:g}", abs(err[PEND_K[-1]]), kind="max", tolerance=TOL_PEND,
+                 unit="-", note="relative time error at the stored runs' k")
+    checks.check("rigid.pendulum.error_falls_with_k", abs(err[PEND_K[-1]]) / abs(err[PEND_K[0]]), kind="max",
+                 tolerance=0.5, unit="-", note="10 x k")
+    wrong = pendulum_error(PEND_K[-1], inertia=1.02 * rigid_chain.I)
+    checks.check("rigid.pendulum.control_inertia_x1.02", abs(wrong), kind="min", tolerance=TOL_PEND, unit="-",
+                  note="a 2 % inertia error must be caught")
+    checks.require()
+
+
+def test_rigid_energy(checks):
+    """Frictionless, undamped (mu 0, e 1): three pieces for 0.3 s (piece 0 pushed into piece 1,
+    impacts, sliding on the floor); kinetic + gravity + contact-spring energy stays within
+    TOL_ENERGY m g H of its start."""
+    c = rigid_chain.Chain(3, mu=0.0, e=1.0, k=2.5e4)
+    r = c.run(0.3, record_every=1e-3, stop_when_fallen=False)
+    e = r["energy"]
+    scale = rigid_chain.M * rigid_chain.G * rigid_chain.H
+    spin = 0.5 * (rigid_chain.I + rigid_chain.M * float(rigid_chain.FOOT @ rigid_chain.FOOT)) * rigid_chain.OMEGA0 ** 2
+    checks.check("rigid.energy.max_drift", float(np.max(np.abs(e - e[0]))) / scale, kind="max",
+                 tolerance=TOL_ENERGY, unit="m g H", note=f"m g H = {scale:.4e} J; piece 0's initial spin about "
+                 f"its edge {spin:.2e} J")
+    checks.check("rigid.energy.contact_active", float(np.max(r["tilt_deg"][:, 1])), kind="min", tolerance=1.0,
+                 unit="deg", note="piece 1 was pushed (the contacts were exercised)")
+    checks.require()
+
+
+def test_rigid_reference(checks):
+    """The stored rigid-body runs (references/rigid/results; rigid_chain.py --all): every
+    piece falls, the front speed converges in contact stiffness and time step, and qdemsph's
+    recorded GPU runs (stiffness_factor 0.1) against the rigid front speed of the same
+    restitution (README.md, "Rigid-body reference"); YADE's beside it."""
+    for name in rigid_chain.RUNS:
+        r = rigid(name)
+        checks.check(f"rigid.{name}.fallen", r["results"]["n_fallen"], kind="min", tolerance=r["params"]["n"],
+                     unit="pieces", wall_s=r["wall_s"])
+    speed = {name: rigid(name)["results"]["front_speed_m_per_s"] for name in rigid_chain.RUNS}
+    for run, ref, tol, what in RIGID_CONVERGENCE:
+        checks.check(f"rigid.convergence.{run}", speed[run], kind="rel", reference=speed[ref], tolerance=tol,
+                     unit="m/s", note=f"{what}: front speed (YADE's window) against {ref}")
+    for s in ("_e0.3_w12", "_e1_w20"):
+        checks.info(f"rigid.convergence.n20_mu0.5{s}_k2.5e4", speed[f"n20_mu0.5{s}_k2.5e4"], unit="m/s",
+                    reference=speed[f"n20_mu0.5{s}_k1e5"], note="k / 4")
+    gpu = {r["run"]: r for r in json.loads(GPU_RUNS_K01.read_text())}
+    yv = {tag: front_speed(yade(tag)["results"]["fall_time_s"], make_yade_chain.PITCH, 5, 18)
+          for tag in ("n40", "n20_stiff4", "n20_stiff16", "n20_mu03_stiff16")}
+    for name, q, checked in RIGID_VS_QDEMSPH:
+        r = rigid(name)
+        v = r["results"]["front_speed_m_per_s"]
+        lo, hi = r["results"]["fit_pieces"]
+        if lo == 10:
+            note = f"pieces 10..38; YADE n40 {yade('n40')['results']['front_speed_m_per_s']:.4f}"
+        else:
+            note = "pieces 5..18; YADE " + ", ".join(f"{t} {x:.4f}" for t, x in yv.items())
+        checks.info(f"rigid.{name}.front_speed", v, unit="m/s", wall_s=r["wall_s"], note=note)
+        if q is None:
+            continue
+        qv = gpu[q]["front_speed_m_s"][f"{lo}..{hi}"]["qdemsph"]
+        metric = f"gpu_run_k01.{q}.front_speed_vs_rigid"
+        note = f"qdemsph {q} (6 mm pieces) against rigid_chain {name}, pieces {lo}..{hi}"
+        if checked:
+            checks.check(metric, qv, kind="rel", reference=v, tolerance=TOL_VS_RIGID, unit="m/s",
+                         wall_s=gpu[q]["wall_s"], backend=gpu[q]["backend"], note=note)
+        else:
+            checks.info(metric, qv, unit="m/s", reference=v, note=note)
+    meta = dict(title="Shogi chain on the GPU: fall time of each piece, qdemsph variants vs YADE",
+                xlabel="piece", ylabel="t (s)")
+    for name, label in (("n40_mu0.5_e0.3_w12_k1e5", "rigid body, e 0.3, omega0 12"),
+                        ("n40_mu0.5_e1_w20_k4e5", "rigid body, e 1, omega0 20")):
+        f = [float("nan") if x is None else x for x in rigid(name)["results"]["fall_time_s"]]
+        checks.series("yade_shogi_chain_gpu_fall_times", label, range(len(f)), f, style="points", **meta)
     checks.require()
