@@ -50,8 +50,11 @@ class MpiFluidExchange final : public FluidExchange {
     after_keep_ = false;
     ++rebuilds_;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
-    std::vector<double> cost(n);
-    for (std::int64_t i = 0; i < n; ++i) cost[i] = p.type[i] == kSphFluid ? 1.0 : kFluidWallCost;
+    std::vector<double> cost = p.cost;
+    if (cost.size() != p.size()) {
+      cost.resize(n);
+      for (std::int64_t i = 0; i < n; ++i) cost[i] = p.type[i] == kSphFluid ? 1.0 : kFluidWallCost;
+    }
     if (dec_.splitters.empty() || rebalance_) dec_ = balance(comm_, p.x, cost, curve_, max_cell_);
     rebalance_ = false;
 
@@ -65,8 +68,6 @@ class MpiFluidExchange final : public FluidExchange {
     mp.finish(fields_of(o));
     migrated_bytes_ += mp.engine().last_bytes();
     const std::int64_t nown = mp.n_new();
-    load_ = 0;
-    for (std::int64_t i = 0; i < nown; ++i) load_ += o.type[i] == kSphFluid ? 1.0 : kFluidWallCost;
 
     // Ghosts: the band cells of this rank's owned particles, published to all; a particle
     // goes to every other rank with an owned particle in the 5^3 cells around its own. A cell
@@ -113,10 +114,10 @@ class MpiFluidExchange final : public FluidExchange {
     return nown;
   }
 
-  bool keep(double moved) override {
+  bool keep(double moved, double load) override {
     ++steps_;
     ++evaluations_;
-    if (rebalance_due()) {
+    if (rebalance_due(load)) {
       rebalance_ = true;
     } else {
       MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_DOUBLE, MPI_MAX, comm_);
@@ -213,9 +214,9 @@ class MpiFluidExchange final : public FluidExchange {
 
   // Every rebalance_every steps: the owned cost's max / mean - 1 over the ranks against the
   // threshold (the same decision on every rank).
-  bool rebalance_due() {
+  bool rebalance_due(double load) {
     if (every_ <= 0 || steps_ % every_ != 0) return false;
-    double total = load_, most = load_;
+    double total = load, most = load;
     allreduce_sum_same(comm_, &total, 1);
     MPI_Allreduce(MPI_IN_PLACE, &most, 1, MPI_DOUBLE, MPI_MAX, comm_);
     const double mean = total / np_;
@@ -227,10 +228,9 @@ class MpiFluidExchange final : public FluidExchange {
   Curve curve_;
   long every_ = 0;
   double threshold_ = 0, max_cell_ = 0;
-  double skin_ = 0;  // the ghost band's margin beyond the kernel support
-  BandGrid band_;    // band cells: half of support + skin wide, wrapping a periodic z
-  long steps_ = 0;   // keep() calls
-  double load_ = 0;  // owned cost at the last distribute() (the owned set stands until the next)
+  double skin_ = 0;         // the ghost band's margin beyond the kernel support
+  BandGrid band_;           // band cells: half of support + skin wide, wrapping a periodic z
+  long steps_ = 0;          // keep() calls
   bool rebalance_ = false;  // the next distribute() cuts the partition again
   // Traffic (this rank's bytes sent): evaluations counts keep() calls and the distribute()
   // calls no keep() asked for (the first, and the one after a load_state).

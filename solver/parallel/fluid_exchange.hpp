@@ -2,8 +2,9 @@
 // SphStage calls (sph/fluid_exchange.hpp), on MPI_COMM_WORLD.
 //
 // Ownership: a particle (fluid or wall) belongs to the rank whose piece of the space-filling
-// curve holds its position (balance.hpp: the fluid's own cell tree, cut by particle cost:
-// 1 per fluid particle, kFluidWallCost per wall particle). distribute() migrates the owned
+// curve holds its position (balance.hpp: the fluid's own cell tree, cut by particle cost: the
+// neighbour candidates each particle visited in the last evaluation, sph_stage.hpp; before
+// any, 1 per fluid particle and kFluidWallCost per wall particle). distribute() migrates the owned
 // particles to the owners of their positions (MigratePlan) and builds the ghosts (HaloPlan):
 // a particle goes to every rank that owns a particle in the 5^3 band cells of half a kernel
 // support + skin around its own cell, i.e. to every rank with an owned particle within
@@ -22,8 +23,8 @@
 
 namespace qdemsph {
 
-// A wall particle's cost next to a fluid particle's 1: one pass over its fluid neighbours
-// (Adami) against a fluid particle's two passes over all neighbours.
+// A wall particle's cost next to a fluid particle's 1 before any is measured: one pass over
+// its fluid neighbours (Adami) against a fluid particle's two passes over all neighbours.
 inline constexpr double kFluidWallCost = 0.25;
 
 // The ghost band's skin as a fraction of the kernel support: a wider band holds more ghosts

@@ -30,12 +30,14 @@
 namespace qdemsph {
 
 // The per-particle fields that travel with a particle (x, v, rho, m carry state across
-// steps; type, gid, key name it).
+// steps; type, gid, key name it), and what each cost in the last evaluation (does not travel;
+// empty: not measured yet).
 struct FluidParticles {
   std::vector<Vec3> x, v;
   std::vector<double> rho, m;
   std::vector<std::uint8_t> type;
   std::vector<std::uint64_t> gid, key;
+  std::vector<double> cost;
   std::size_t size() const { return x.size(); }
 };
 
@@ -53,14 +55,16 @@ struct FluidTraffic {
 class FluidExchange {
  public:
   virtual ~FluidExchange() = default;
-  // In: this rank's owned particles. Out: the particles it owns now (migrated to the owner of
-  // their position), then the ghosts it needs; returns the owned count. Collective.
+  // In: this rank's owned particles, with their costs when measured (a new partition weights
+  // them). Out: the particles it owns now (migrated to the owner of their position), then the
+  // ghosts it needs (cost empty); returns the owned count. Collective.
   virtual std::int64_t distribute(FluidParticles& p) = 0;
   // At each step after the first distribute(): true when the layout still holds, given this
-  // rank's largest displacement of an owned particle since distribute() (false: the largest
+  // rank's largest displacement of an owned particle since distribute() and its owned
+  // particles' cost in the last evaluation (0: not measured) (false: the largest displacement
   // over the ranks exceeds skin() / 2, or the partition is due to be cut again; call
   // distribute()). The same answer on every rank. Collective.
-  virtual bool keep(double moved) = 0;
+  virtual bool keep(double moved, double load) = 0;
   // The ghost band's margin beyond the kernel support.
   virtual double skin() const = 0;
   // Owned values -> ghost slots of the layout distribute() returned, in records the caller

@@ -158,7 +158,7 @@ class SphStage final : public FluidStage {
     // places the markers it holds from the same vertex positions: a ghost's is its owner's).
     if (coupling_) coupling_->place(x_.view(), v_.view(), gid_.cview(), type_.cview(), n_, ddt);
     if (ex_) {
-      if (laid_out_ && ex_->keep(moved()))
+      if (laid_out_ && ex_->keep(moved(), owned_cost()))
         refresh_positions();
       else
         redistribute();
@@ -176,6 +176,11 @@ class SphStage final : public FluidStage {
     const auto rho = rho_.view();
     const auto p = p_.view();
     const auto drho = drho_.view();
+    // Distributed: each owned particle's cost, the neighbour candidates its passes visit (the
+    // partition's weights, fluid_exchange.hpp): a fluid particle's density and force passes
+    // visit the same candidates, a wall's Adami pass the fluid ones, a marker's Adami and
+    // force passes the fluid ones.
+    double* const cost = ex_ ? cost_.view().p : nullptr;
     // Density rate at the drifted positions and half-step velocities (continuity + delta-SPH),
     // then rho_{n+1} = rho_n + dt drho: the pressure is taken at the same time as the positions
     // (a density lagging half a step behind the positions makes the acoustic modes grow).
@@ -184,8 +189,10 @@ class SphStage final : public FluidStage {
           if (slot[i] >= nown) return;
           const PairState si{x[i], v[i], rho[i], m[i], 0.0};
           double dr = 0;
+          std::int64_t visited = 0;
           const double s2 = P.kernel.support2;
           sph_for_each_near(g, start, kGroupFluid, kSphGroups, si.x, [&](std::int64_t j, int zz) {
+            ++visited;
             const Vec3 xj = g.image(x[j], zz);
             const double r2 = norm2(si.x - xj);  // 0: i itself (not its periodic images)
             if (r2 == 0 || r2 >= s2) return;     // most candidates: no further loads
@@ -193,6 +200,7 @@ class SphStage final : public FluidStage {
             dr += sph_density_rate(P, si, sj, j < nf);
           });
           drho[i] = dr;
+          if (cost) cost[i] = 2.0 * visited;
         });
     // Equation of state (fluid), density floored at the tension cut-off (sph_eos.hpp); the
     // pair term p / rho^2 of every particle once (sph_pair.hpp).
@@ -220,10 +228,13 @@ class SphStage final : public FluidStage {
             if (slot[i] >= nown) return;
             const Vec3 xi = x[i];
             AdamiSum s;
+            std::int64_t visited = 0;
             sph_for_each_near(g, start, kGroupFluid, kGroupFluid + 1, xi,
                               [&](std::int64_t j, int zz) {
+                                ++visited;
                                 adami_add(s, P.kernel, xi, g.image(x[j], zz), p[j], rho[j]);
                               });
+            if (cost) cost[i] = (q < nm ? 2.0 : 1.0) * visited;
             const double pw = adami_pressure(s, P.gravity, Vec3{});
             p[i] = pw;
             rho[i] = P.eos.density(pw);
@@ -419,8 +430,8 @@ class SphStage final : public FluidStage {
     return x_.bytes() + v_.bytes() + a_.bytes() + rho_.bytes() + p_.bytes() + drho_.bytes() +
            pr_.bytes() + m_.bytes() + x0_.bytes() + type_.bytes() + gid_.bytes() + key_.bytes() +
            slot_.bytes() + tmp3_.bytes() + tmpd_.bytes() + tmpu_.bytes() + tmpt_.bytes() +
-           tmpi_.bytes() + send_.bytes() + inv_.bytes() + pack_.bytes() + keys_.bytes() +
-           start_.bytes() + order_.bytes() + scratch_.bytes() +
+           tmpi_.bytes() + send_.bytes() + inv_.bytes() + pack_.bytes() + cost_.bytes() +
+           keys_.bytes() + start_.bytes() + order_.bytes() + scratch_.bytes() +
            (coupling_ ? coupling_->bytes() : 0);
   }
 
@@ -491,7 +502,8 @@ class SphStage final : public FluidStage {
     FluidParticles q{owned(x_.to_host(), slot),    owned(v_.to_host(), slot),
                      owned(rho_.to_host(), slot),  owned(m_.to_host(), slot),
                      owned(type_.to_host(), slot), owned(gid_.to_host(), slot),
-                     owned(key_.to_host(), slot)};
+                     owned(key_.to_host(), slot),  {}};
+    if (laid_out_) q.cost = owned(cost_.to_host(), slot);  // measured by the last compute()
     const std::int64_t nown = ex_->distribute(q);
     std::vector<std::int64_t> ord(q.size());
     std::iota(ord.begin(), ord.end(), std::int64_t{0});
@@ -507,6 +519,7 @@ class SphStage final : public FluidStage {
     n_own_ = nown;
     send_.assign(ex_->send_slots());
     inv_.resize(n_);
+    cost_.resize(n_);
     x0_.assign(std::vector<Vec3>(q.x.begin(), q.x.begin() + nown));
     laid_out_ = true;
     // The neighbour grid: the window of the whole box's cells that holds this rank's particles,
@@ -528,6 +541,15 @@ class SphStage final : public FluidStage {
     }
     grid_ = grid_all_.window(lo, hi);
     start_.resize(kSphGroups * grid_.count() + 1);
+  }
+
+  // Distributed: the owned particles' cost in the last compute() (0 before the first).
+  double owned_cost() {
+    const auto c = cost_.cview();
+    const auto slot = slot_.cview();
+    const std::int64_t nown = n_own_;
+    return reduce_sum(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) { return slot[i] < nown ? c[i] : 0.0; });
   }
 
   // Distributed: the largest displacement of an owned particle since the last redistribute()
@@ -669,6 +691,7 @@ class SphStage final : public FluidStage {
   Buffer<std::int64_t> send_{S};  // distributed: the layout slots whose records go out
   Buffer<std::int64_t> inv_{S};   // distributed: the particle in each layout slot (at a refresh)
   Buffer<double> pack_{S};        // distributed, on a device: the records sent and received
+  Buffer<double> cost_{S};        // distributed: each particle's cost in the last compute()
   CellGrid grid_all_;             // the whole fluid box
   CellGrid grid_;                 // the cells searched: the whole box, or a rank's window of it
   Buffer<std::int64_t> keys_{S}, start_{S}, order_{S}, scratch_{S};

@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdio>
 #include <numeric>
 #include <string>
@@ -413,5 +414,46 @@ TEST(DistributedFluid, PeriodicSlabEqualsOneRankBitForBit) {
       EXPECT_EQ(outside, 0) << "a particle outside the period";
       EXPECT_EQ(worst.max(), 0.0);
     }
+  }
+}
+
+// The partition weighs the particles' measured costs: the dam break's particles with x below
+// 0.1 m cost 20, the others 1. Cut by those costs, the ranks' owned costs are even to 0.1 (the
+// balancer's 5 % plus its tree's largest cell) and their particle counts are not; cut without
+// costs (the defaults by type), the same costs are not even.
+TEST(DistributedFluid, PartitionWeighsTheMeasuredCosts) {
+  const FluidSetup f = dam_setup();
+  const int me = rank_of(), np = size_of();
+  auto cost_of = [](const Vec3& x) { return x.x < 0.1 ? 20.0 : 1.0; };
+  // {max / mean - 1 of the owned cost, of the owned count} over the ranks.
+  auto spread = [&](bool weighted) {
+    auto ex = make_fluid_exchange(options(50, 0.0), f);
+    const std::int64_t n = f.size(), b = n * me / np, e = n * (me + 1) / np;
+    FluidParticles p;
+    for (std::int64_t i = b; i < e; ++i) {
+      p.x.push_back(f.x[i]), p.v.push_back(f.v[i]), p.rho.push_back(f.rho[i]);
+      p.m.push_back(f.m[i]), p.type.push_back(f.type[i]), p.gid.push_back(f.gid[i]);
+      p.key.push_back(f.gid[i]);
+      if (weighted) p.cost.push_back(cost_of(f.x[i]));
+    }
+    const std::int64_t nown = ex->distribute(p);
+    EXPECT_TRUE(p.cost.empty());  // costs do not travel
+    double mine[2] = {0, static_cast<double>(nown)};
+    for (std::int64_t i = 0; i < nown; ++i) mine[0] += cost_of(p.x[i]);
+    double most[2] = {mine[0], mine[1]}, sum[2] = {mine[0], mine[1]};
+    MPI_Allreduce(MPI_IN_PLACE, most, 2, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    MPI_Allreduce(MPI_IN_PLACE, sum, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    return std::array<double, 2>{most[0] / (sum[0] / np) - 1, most[1] / (sum[1] / np) - 1};
+  };
+  const auto w = spread(true), c = spread(false);
+  if (me == 0)
+    std::printf(
+        "[fluid partition, %d ranks] by cost: cost spread %.3f, count spread %.3f; by count: cost "
+        "spread %.3f, count spread %.3f\n",
+        np, w[0], w[1], c[0], c[1]);
+  EXPECT_LE(w[0], 0.1);
+  if (np > 1) {
+    EXPECT_GT(w[1], 0.1);  // the cheap part's ranks own more particles
+    EXPECT_GT(c[0], w[0] + 0.05);  // a cut without the costs leaves them less even
   }
 }
