@@ -101,6 +101,22 @@ double expect_same_state(const BackendState& a, const BackendState& b, bool live
 
 double relative(double a, double b, double scale) { return std::abs(a - b) / scale; }
 
+// The restarts each test makes: the p-rank checkpoint `b` on p, p / 2 and 1 ranks, and the
+// one-rank checkpoint `a` on p ranks.
+struct Restart {
+  const Checkpoint* c;
+  fs::path file;
+  int written_on, ranks;
+};
+std::vector<Restart> restart_cases(const Checkpoint& a, const fs::path& one_file,
+                                   const Checkpoint& b, const fs::path& all_file, int p) {
+  std::vector<Restart> cases{{&b, all_file, p, p}};
+  for (int m : {p / 2, 1})
+    if (m >= 1 && m != cases.back().ranks) cases.push_back({&b, all_file, p, m});
+  if (p > 1) cases.push_back({&a, one_file, 1, p});
+  return cases;
+}
+
 }  // namespace
 
 TEST(DistributedCheckpoint, WrittenOnAnyRanksRestartsOnAnyRanks) {
@@ -168,15 +184,7 @@ TEST(DistributedCheckpoint, WrittenOnAnyRanksRestartsOnAnyRanks) {
     std::printf("[checkpoint, %d ranks] %zu vertices, %zu history entries\n", p,
                 b.vertex_gid.size(), b.contact_keys.size());
 
-  struct Restart {
-    const Checkpoint* c;
-    fs::path file;
-    int written_on, ranks;
-  };
-  std::vector<Restart> cases{{&b, all_file, p, p}};
-  for (int m : {p / 2, 1})
-    if (m >= 1 && m != cases.back().ranks) cases.push_back({&b, all_file, p, m});
-  if (p > 1) cases.push_back({&a, one_file, 1, p});
+  const std::vector<Restart> cases = restart_cases(a, one_file, b, all_file, p);
   for (const Restart& c : cases) {
     SCOPED_TRACE(std::to_string(c.written_on) + " -> " + std::to_string(c.ranks) + " ranks");
     MPI_Comm sub;
@@ -285,15 +293,7 @@ TEST(DistributedCheckpoint, CoupledFluidRestartsOnAnyRanksExactly) {
           p, dx, fc);
   }
 
-  struct Restart {
-    const Checkpoint* c;
-    fs::path file;
-    int written_on, ranks;
-  };
-  std::vector<Restart> cases{{&b, all_file, p, p}};
-  for (int m : {p / 2, 1})
-    if (m >= 1 && m != cases.back().ranks) cases.push_back({&b, all_file, p, m});
-  if (p > 1) cases.push_back({&a, one_file, 1, p});
+  const std::vector<Restart> cases = restart_cases(a, one_file, b, all_file, p);
   for (const Restart& c : cases) {
     SCOPED_TRACE(std::to_string(c.written_on) + " -> " + std::to_string(c.ranks) + " ranks");
     MPI_Comm sub;

@@ -92,6 +92,20 @@ StateDiff diff(const FluidState& a, const FluidState& b) {
   return d;
 }
 
+// This rank's contiguous share of the setup's particles, as a stage hands them to its first
+// distribute() (order key = global id).
+FluidParticles share_of(const FluidSetup& f) {
+  const int me = rank_of(), np = size_of();
+  const std::int64_t n = f.size(), b = n * me / np, e = n * (me + 1) / np;
+  FluidParticles p;
+  for (std::int64_t i = b; i < e; ++i) {
+    p.x.push_back(f.x[i]), p.v.push_back(f.v[i]), p.rho.push_back(f.rho[i]);
+    p.m.push_back(f.m[i]), p.type.push_back(f.type[i]), p.gid.push_back(f.gid[i]);
+    p.key.push_back(f.gid[i]);
+  }
+  return p;
+}
+
 // Every particle id once among the gathered particles (rank 0).
 bool each_id_once(const FluidState& s, std::int64_t n) {
   std::vector<std::uint64_t> g = s.gid;
@@ -265,13 +279,7 @@ TEST(DistributedFluid, TrafficIsWhatThePlansSend) {
   const FluidSetup f = dam_setup();
   const int me = rank_of(), np = size_of();
   auto ex = make_fluid_exchange(options(50, 0.0), f);
-  const std::int64_t n = f.size(), b = n * me / np, e = n * (me + 1) / np;
-  FluidParticles p;
-  for (std::int64_t i = b; i < e; ++i) {
-    p.x.push_back(f.x[i]), p.v.push_back(f.v[i]), p.rho.push_back(f.rho[i]);
-    p.m.push_back(f.m[i]), p.type.push_back(f.type[i]), p.gid.push_back(f.gid[i]);
-    p.key.push_back(f.gid[i]);
-  }
+  FluidParticles p = share_of(f);
   const std::vector<std::uint64_t> share(p.gid.begin(), p.gid.end());
   const std::int64_t nown = ex->distribute(p);
   std::int64_t count[2] = {static_cast<std::int64_t>(p.size()) - nown, 0};  // ghosts, arrived
@@ -428,14 +436,9 @@ TEST(DistributedFluid, PartitionWeighsTheMeasuredCosts) {
   // {max / mean - 1 of the owned cost, of the owned count} over the ranks.
   auto spread = [&](bool weighted) {
     auto ex = make_fluid_exchange(options(50, 0.0), f);
-    const std::int64_t n = f.size(), b = n * me / np, e = n * (me + 1) / np;
-    FluidParticles p;
-    for (std::int64_t i = b; i < e; ++i) {
-      p.x.push_back(f.x[i]), p.v.push_back(f.v[i]), p.rho.push_back(f.rho[i]);
-      p.m.push_back(f.m[i]), p.type.push_back(f.type[i]), p.gid.push_back(f.gid[i]);
-      p.key.push_back(f.gid[i]);
-      if (weighted) p.cost.push_back(cost_of(f.x[i]));
-    }
+    FluidParticles p = share_of(f);
+    if (weighted)
+      for (const Vec3& x : p.x) p.cost.push_back(cost_of(x));
     const std::int64_t nown = ex->distribute(p);
     EXPECT_TRUE(p.cost.empty());  // costs do not travel
     double mine[2] = {0, static_cast<double>(nown)};
@@ -453,7 +456,7 @@ TEST(DistributedFluid, PartitionWeighsTheMeasuredCosts) {
         np, w[0], w[1], c[0], c[1]);
   EXPECT_LE(w[0], 0.1);
   if (np > 1) {
-    EXPECT_GT(w[1], 0.1);  // the cheap part's ranks own more particles
+    EXPECT_GT(w[1], 0.1);          // the cheap part's ranks own more particles
     EXPECT_GT(c[0], w[0] + 0.05);  // a cut without the costs leaves them less even
   }
 }
