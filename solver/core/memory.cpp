@@ -17,6 +17,7 @@ void* cuda_alloc(std::size_t) { no_cuda(); }
 void cuda_free(void*) noexcept {}
 void cuda_copy(void*, Space, const void*, Space, std::size_t) { no_cuda(); }
 void cuda_zero(void*, std::size_t) { no_cuda(); }
+void cuda_prefer_device(int) {}
 void cuda_index_copy(void*, const void*, const std::int64_t*, std::int64_t, std::size_t, bool) {
   no_cuda();
 }
@@ -63,6 +64,12 @@ void space_gather(Space s, void* dst, const void* src, const std::int64_t* idx, 
 void space_scatter(Space s, void* dst, const std::int64_t* idx, const void* src, std::int64_t n,
                    std::size_t elem) {
   index_copy(s, dst, src, idx, n, elem, true);
+}
+
+int cuda_device_for(int index, int devices) {
+  if (devices <= 0) return 0;
+  const int d = index % devices;
+  return d < 0 ? d + devices : d;
 }
 
 void* space_alloc(Space s, std::size_t bytes) {

@@ -29,6 +29,11 @@ void space_gather(Space s, void* dst, const void* src, const std::int64_t* idx, 
 void space_scatter(Space s, void* dst, const std::int64_t* idx, const void* src, std::int64_t n,
                    std::size_t elem);
 bool cuda_available();
+// The GPU of this process: device `index` modulo the visible devices, chosen at the process's
+// first use of a GPU (allocation or gpu_info); default 0. An MPI rank passes its rank on the
+// node (parallel/world.cpp), so the ranks of a node spread over its GPUs.
+void cuda_prefer_device(int index);
+int cuda_device_for(int index, int devices);  // index mod devices (0 without devices)
 
 template <class T>
 struct View {

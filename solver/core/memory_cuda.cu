@@ -45,11 +45,30 @@ bool cuda_available() {
   return ok;
 }
 
+namespace {
+int g_prefer = 0;
+// Sets the preferred device once, before this process's first context is made.
+void use_preferred_device() {
+  static const bool done = [] {
+    int n = 0;
+    if (cudaGetDeviceCount(&n) == cudaSuccess && n > 0)
+      QDEMSPH_CUDA_CHECK(cudaSetDevice(cuda_device_for(g_prefer, n)), "cudaSetDevice");
+    else
+      cudaGetLastError();
+    return true;
+  }();
+  (void)done;
+}
+}  // namespace
+
+void cuda_prefer_device(int index) { g_prefer = index; }
+
 void* cuda_alloc(std::size_t bytes) {
   if (!cuda_available())
     throw InputError(
         "the CUDA backend needs a GPU, and this machine has none visible "
         "(check nvidia-smi and CUDA_VISIBLE_DEVICES)");
+  use_preferred_device();
   void* p = nullptr;
   const cudaError_t e = cudaMalloc(&p, bytes);
   if (e == cudaErrorMemoryAllocation) {
@@ -154,6 +173,7 @@ GpuInfo gpu_info() {
                              : "no CUDA device visible";
     return g;
   }
+  use_preferred_device();
   cudaDeviceProp p{};
   if (cudaGetDevice(&g.device) != cudaSuccess ||
       cudaGetDeviceProperties(&p, g.device) != cudaSuccess ||

@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "core/memory.hpp"
 #include "parallel/comm_plan.hpp"  // <mpi.h>
 
 namespace qdemsph {
@@ -29,7 +30,9 @@ const World& world_start(int* argc, char*** argv) {
   MPI_Comm node;
   MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, g_world.rank, MPI_INFO_NULL, &node);
   MPI_Comm_size(node, &g_world.local_size);
+  MPI_Comm_rank(node, &g_world.local_rank);
   MPI_Comm_free(&node);
+  cuda_prefer_device(g_world.local_rank);
   return g_world;
 }
 

@@ -9,11 +9,13 @@ namespace qdemsph {
 struct World {
   int rank = 0, size = 1;
   int local_size = 1;  // ranks on this node (MPI_COMM_TYPE_SHARED)
+  int local_rank = 0;  // this rank's place among them (its GPU: core/memory.hpp)
   bool mpi = false;    // MPI_Init was called
   bool root() const { return rank == 0; }
 };
 
-// MPI_Init_thread (funneled: MPI is called from the main thread only) when launched by MPI.
+// MPI_Init_thread (funneled: MPI is called from the main thread only) when launched by MPI;
+// the rank's GPU, should it use one, is its local rank modulo the visible GPUs.
 const World& world_start(int* argc, char*** argv);
 // MPI_Finalize when started.
 void world_stop();

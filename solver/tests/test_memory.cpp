@@ -1,5 +1,5 @@
 // Indexed copies within a memory space (core/memory.hpp): known answers on the host, the same
-// on a device (skipped without a GPU).
+// on a device (skipped without a GPU); the GPU of each rank.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -45,6 +45,16 @@ TEST(Memory, GatherAndScatterOnTheDeviceMatchTheHost) {
   EXPECT_EQ(d.gathered, h.gathered);
   EXPECT_EQ(d.scattered, h.scattered);
   EXPECT_EQ(d.bytes, h.bytes);
+}
+
+// An MPI rank's GPU: its rank on the node modulo the node's GPUs (parallel/world.cpp).
+TEST(Memory, RanksSpreadOverTheGpus) {
+  EXPECT_EQ(cuda_device_for(0, 2), 0);
+  EXPECT_EQ(cuda_device_for(1, 2), 1);
+  EXPECT_EQ(cuda_device_for(2, 2), 0);
+  EXPECT_EQ(cuda_device_for(7, 4), 3);
+  EXPECT_EQ(cuda_device_for(3, 1), 0);
+  EXPECT_EQ(cuda_device_for(3, 0), 0);
 }
 
 }  // namespace
