@@ -78,6 +78,13 @@ run chain20_mu03   shogi_chain.py --n 20 --mu 0.3 --dt 4e-5 --young 1e7 --tag _m
 # leaning-piece case (shogi_leaning) loses most of its friction effect at young 1e7.
 run chain20_mu03_stiff4  shogi_chain.py --n 20 --mu 0.3 --dt 2e-5 --young 4e7 --omega0 12 --tag _mu03_stiff4
 run chain20_mu03_stiff16 shogi_chain.py --n 20 --mu 0.3 --dt 1e-5 --young 1.6e8 --omega0 12 --tag _mu03_stiff16
+# Stiffest chains (issue 5: does the front keep slowing toward the rigid-body chain's 0.30 m/s,
+# verification/cases/yade_shogi_chain/rigid_chain.py?): 160 x and 640 x young, dt scaled as
+# 1/sqrt(young) from the 16x run, push 20 rad/s as the undamped rigid chain (12 stalls there);
+# the 16x run again at that push separates push from stiffness. 4, 13 and 24 min of one core.
+run chain20_stiff16_w20 shogi_chain.py --n 20 --mu 0.5 --dt 1e-5 --young 1.6e8 --omega0 20 --tag _stiff16_w20
+run chain20_stiff160 shogi_chain.py --n 20 --mu 0.5 --dt 3.16e-6 --young 1.6e9 --omega0 20 --tag _stiff160
+run chain20_stiff640 shogi_chain.py --n 20 --mu 0.5 --dt 1.58e-6 --young 6.4e9 --omega0 20 --tag _stiff640
 
 $PY convergence.py "$OUT"
 echo "logs in $LOGDIR"
