@@ -475,6 +475,12 @@ class SphStage final : public FluidStage {
           key[i] = (static_cast<std::uint64_t>(ba) << kSphKeyShift) |
                    static_cast<std::uint64_t>(i - start[b]);
         });
+    if (ex_) {  // the particle in each layout slot, for the refreshes until the next sort
+      const auto slot = slot_.cview();
+      const auto inv = inv_.view();
+      for_each(
+          Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) { inv[slot[i]] = i; });
+    }
   }
   template <class T>
   void permute(Buffer<T>& b, Buffer<T>& tmp, View<const std::int64_t> ord) {
@@ -582,10 +588,6 @@ class SphStage final : public FluidStage {
   void refresh_ghosts(const GhostColumns f) {
     const std::int64_t ns = send_.size(), ng = n_ - n_own_, nown = n_own_;
     const int w = f.n;
-    const auto slot = slot_.cview();
-    const auto inv = inv_.view();
-    for_each(
-        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) { inv[slot[i]] = i; });
     const auto at = inv_.cview();
     const auto send = send_.cview();
     const std::span<std::byte> out = ex_->send_buffer(w * sizeof(double));
@@ -689,7 +691,7 @@ class SphStage final : public FluidStage {
   Buffer<std::uint64_t> gid_{S}, key_{S}, tmpu_{S};
   Buffer<std::int64_t> slot_{S}, tmpi_{S};
   Buffer<std::int64_t> send_{S};  // distributed: the layout slots whose records go out
-  Buffer<std::int64_t> inv_{S};   // distributed: the particle in each layout slot (at a refresh)
+  Buffer<std::int64_t> inv_{S};   // distributed: the particle in each layout slot (last sort)
   Buffer<double> pack_{S};        // distributed, on a device: the records sent and received
   Buffer<double> cost_{S};        // distributed: each particle's cost in the last compute()
   CellGrid grid_all_;             // the whole fluid box
