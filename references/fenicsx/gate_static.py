@@ -416,41 +416,40 @@ def main():
                                  "elastica_axis_x": el[2], "newton_its": r["its"], "solve_s": r["s"]})
                 at = {r["H"]: r["tip"] for r in res}
                 h14 = min(at, key=lambda h: abs(h - 0.140))
-                log(f"{mname} {state:6s} {model:6s} {load:8s}: tip at H = {h14:.3f}: "
-                    f"{1e3 * at[h14][0]:7.3f} / {1e3 * at[h14][1]:6.3f} mm, {timings[f'{mname}/{state}/{model}/{load}']:.1f} s")
+                log(f"{mname} {state:6s} {model:6s} {load:8s}: tip at H = {h14:.3f}: {1e3 * at[h14][0]:7.3f} / "
+                    f"{1e3 * at[h14][1]:6.3f} mm, {timings[f'{mname}/{state}/{model}/{load}']:.1f} s")
+
+    def case(mesh, state, model, load):
+        """The rows of one case, by level."""
+        return sorted((r for r in rows if (r["mesh"], r["state"], r["model"], r["load"]) == (mesh, state, model, load)),
+                      key=lambda r: r["H"])
 
     # Mesh convergence: the largest relative change of the horizontal tip between the two finest meshes.
     conv = {}
     if len(args.meshes) >= 2:
-        m_c, m_f = args.meshes[-2], args.meshes[-1]
         for state in args.states:
             for model, load in models:
-                c = {r["H"]: r["tip_x"] for r in rows if (r["mesh"], r["state"], r["model"], r["load"]) == (m_c, state, model, load)}
-                f = {r["H"]: r["tip_x"] for r in rows if (r["mesh"], r["state"], r["model"], r["load"]) == (m_f, state, model, load)}
-                conv[f"{state}/{model}/{load}"] = max(abs(f[h] - c[h]) / abs(f[h]) for h in f)
+                c = case(args.meshes[-2], state, model, load)
+                f = case(args.meshes[-1], state, model, load)
+                conv[f"{state}/{model}/{load}"] = max(abs(b["tip_x"] - a["tip_x"]) / abs(b["tip_x"]) for a, b in zip(c, f))
     finest = args.meshes[-1]
-    need, need_t = {}, {}
+    need, need_t, beam_check = {}, {}, {}
     for state in args.states:
         for model, load in models:
-            sel = sorted((r for r in rows if (r["mesh"], r["state"], r["model"], r["load"]) == (finest, state, model, load)),
-                         key=lambda r: r["H"])
+            key = f"{state}/{model}/{load}"
+            sel = case(finest, state, model, load)
             hs, tx = [r["H"] for r in sel], [r["tip_x"] for r in sel]
-            need[f"{state}/{model}/{load}"] = level_for_tip(hs, tx, EXP_PEAK_TIP)
-            need_t[f"{state}/{model}/{load}"] = [level_for_tip(hs, tx, d) for d in EXP_X]
-
-    beam_check = {}
-    for state in args.states:
-        for model, load in models:
-            sel = [r for r in rows if (r["mesh"], r["state"], r["model"], r["load"]) == (finest, state, model, load)]
+            need[key] = level_for_tip(hs, tx, EXP_PEAK_TIP)
+            need_t[key] = [level_for_tip(hs, tx, d) for d in EXP_X]
             if model == "linear":
                 q = [r["tip_x"] / r["beam_eb"] for r in sel]
-                beam_check[f"{state}/{model}/{load}"] = {"tip_x_over_euler_bernoulli": [min(q), max(q)], "tip_x_over_timoshenko": [
-                    min(r["tip_x"] / r["beam_timoshenko"] for r in sel), max(r["tip_x"] / r["beam_timoshenko"] for r in sel)]}
+                qt = [r["tip_x"] / r["beam_timoshenko"] for r in sel]
+                beam_check[key] = {"tip_x_over_euler_bernoulli": [min(q), max(q)],
+                                   "tip_x_over_timoshenko": [min(qt), max(qt)]}
             else:
                 qx = [r["tip_x"] / r["elastica_x"] for r in sel]
                 qy = [r["tip_y"] / r["elastica_y"] for r in sel]
-                beam_check[f"{state}/{model}/{load}"] = {"tip_x_over_elastica": [min(qx), max(qx)],
-                                                          "tip_y_over_elastica": [min(qy), max(qy)]}
+                beam_check[key] = {"tip_x_over_elastica": [min(qx), max(qx)], "tip_y_over_elastica": [min(qy), max(qy)]}
     script = Path(__file__).resolve()
     lam, mu = lame(E_RUBBER, NU_RUBBER)
     doc = {
