@@ -164,11 +164,13 @@ struct ContactTopology {
         const int e1 = swap ? eb : ea, e2 = swap ? ea : eb;
         const int a0 = edge_v[e1], a1 = edge_v[ne + e1], b0 = edge_v[e2], b1 = edge_v[ne + e2];
         if (same && (a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1)) continue;
-        const std::int32_t ends[4] = {a0, a1, b0, b1};
-        if (!eval.owns(kEdgeEdge, ends)) continue;
         const Vec3 xa0 = x[a0], xa1 = x[a1], xb0 = x[b0], xb1 = x[b1];
         const double reach = 0.5 * (norm(xa1 - xa0) + norm(xb1 - xb0)) + d_dem + tol;
         if (norm2(0.5 * ((xa0 + xa1) - (xb0 + xb1))) > reach * reach) continue;
+        // After the distance test: the anchor's owner lookup reads four vertices' body, flag
+        // and global id, which most far-apart edge pairs need not (the same records either way).
+        const std::int32_t ends[4] = {a0, a1, b0, b1};
+        if (!eval.owns(kEdgeEdge, ends)) continue;
         const EdgeEdge ee = edge_edge(xa0, xa1, xb0, xb1, edge_normal(e1), edge_normal(e2));
         // Edges have no face region to confirm a penetration: two skew edges merely passing
         // behind each other would read as a deep overlap. Accept |d| < D_DEM only.
