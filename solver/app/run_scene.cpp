@@ -387,10 +387,14 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       cj["surface_triangles"] = static_cast<std::int64_t>(model.contact.tri_v.size());
       summary["contact"] = cj;
     }
+    // A distributed fluid's upkeep inside "sph" (the skin test and ghost refreshes, the layout
+    // rebuilds) as sub-phases sph.halo / sph.rebuild; "sph" stays the whole fluid step.
+    if (fluid)
+      for (const auto& [k, v] : fluid->stage_seconds()) phases[k] = phase_map[k] = v;
     summary["phases"] = phases;
 #ifdef QDEMSPH_HAVE_MPI
     if (dist) {
-      ParallelRecord r = dist->record(timers.seconds());
+      ParallelRecord r = dist->record(phase_map);
       if (fluid_exchange) r.set_fluid(fluid_exchange->traffic());
       summary["parallel"] = r.to_json();
     }

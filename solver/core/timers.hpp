@@ -47,6 +47,7 @@ class PhaseTimers {
   };
   Scope scope(const char* name) { return Scope(*this, name); }
   const std::map<std::string, double>& seconds() const { return seconds_; }
+  void clear() { seconds_.clear(); }
 
  private:
   std::function<void()> sync_;

@@ -501,12 +501,15 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       return it == m.end() ? 0.0 : it->second;
     };
     const double contact = local_contact_seconds();
+    // The fluid's ghost refreshes and layout rebuilds count as halo and migration, like the
+    // bodies' (sph_stage.hpp: sub-phases sph.halo, sph.rebuild of the run's "sph").
+    const double fh = sec(run_phases, "sph.halo"), fr = sec(run_phases, "sph.rebuild");
     double p[8] = {sec(t, "elements") - contact,
                    sec(t, "integration"),
                    contact,
-                   sec(run_phases, "sph"),
-                   sec(t, "halo"),
-                   sec(t, "migration"),
+                   sec(run_phases, "sph") - fh - fr,
+                   sec(t, "halo") + fh,
+                   sec(t, "migration") + fr,
                    sec(t, "balance"),
                    sec(run_phases, "output")};
     double mx[8], sum[8];

@@ -98,7 +98,7 @@ class DistributedBackend : public Backend {
   virtual int rank() const = 0;
   virtual int size() const = 0;
   // Records for summary.json (collective). run_phases: the run's phase seconds on this rank
-  // ("output", "sph" are taken from it).
+  // ("output", "sph" and the fluid's sub-phases "sph.halo", "sph.rebuild" are taken from it).
   virtual ParallelRecord record(const std::map<std::string, double>& run_phases) = 0;
   // The checkpoint hook: this rank's owned state, and the collective restart from slices.
   virtual StateSlice export_state() = 0;

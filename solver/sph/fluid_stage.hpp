@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -66,6 +67,9 @@ class FluidStage {
   // particle count differs).
   virtual FluidState save_state() = 0;
   virtual void load_state(const FluidState& state) = 0;
+  // Seconds of the sub-phases inside compute() (distributed: "sph.halo", "sph.rebuild";
+  // one rank: none), for summary.json and the parallel record.
+  virtual std::map<std::string, double> stage_seconds() const = 0;
   virtual std::int64_t size() const = 0;
   virtual std::int64_t n_fluid() const = 0;
   virtual std::int64_t n_marker() const = 0;  // boundary markers of coupled bodies

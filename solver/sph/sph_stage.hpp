@@ -32,6 +32,7 @@
 #include "core/error.hpp"
 #include "core/error_flag.hpp"
 #include "core/memory.hpp"
+#include "core/timers.hpp"
 #include "neighbor/cell_grid.hpp"
 #include "physics/sph_boundary.hpp"
 #include "physics/sph_pair.hpp"
@@ -124,6 +125,7 @@ class SphStage final : public FluidStage {
     }
     if (!ex_) sort();  // groups contiguous before the first compute places the markers
     compute();
+    timers_.clear();  // the first layout is set-up, not a step's upkeep
   }
 
   void kick(double h) override {
@@ -158,10 +160,17 @@ class SphStage final : public FluidStage {
     // places the markers it holds from the same vertex positions: a ghost's is its owner's).
     if (coupling_) coupling_->place(x_.view(), v_.view(), gid_.cview(), type_.cview(), n_, ddt);
     if (ex_) {
-      if (laid_out_ && ex_->keep(moved(), owned_cost()))
+      bool keep = false;
+      {
+        auto s = timers_.scope("sph.halo");
+        keep = laid_out_ && ex_->keep(moved(), owned_cost());
+      }
+      if (keep) {
         refresh_positions();
-      else
+      } else {
+        auto s = timers_.scope("sph.rebuild");
         redistribute();
+      }
     }
     sort();
     const SphParams P = P_;
@@ -422,6 +431,7 @@ class SphStage final : public FluidStage {
     pending_dt_ = 0;
   }
 
+  std::map<std::string, double> stage_seconds() const override { return timers_.seconds(); }
   std::int64_t size() const override { return n_global_; }
   std::int64_t n_fluid() const override { return nf_global_; }
   std::int64_t n_marker() const override { return nm_; }
@@ -586,6 +596,7 @@ class SphStage final : public FluidStage {
   // double per column) are packed and unpacked where the arrays live; a GPU stage copies only
   // the records between device and host.
   void refresh_ghosts(const GhostColumns f) {
+    auto scope = timers_.scope("sph.halo");
     const std::int64_t ns = send_.size(), ng = n_ - n_own_, nown = n_own_;
     const int w = f.n;
     const auto at = inv_.cview();
@@ -699,6 +710,10 @@ class SphStage final : public FluidStage {
   Buffer<std::int64_t> keys_{S}, start_{S}, order_{S}, scratch_{S};
   std::unique_ptr<SolidCoupling<Exec>> coupling_;  // null without bodies
   std::unique_ptr<FluidExchange> ex_;              // null on one rank
+  // Distributed: the layout's upkeep inside compute(), device work included: "sph.halo" (the
+  // skin test and the ghost refreshes), "sph.rebuild" (redistribute(): migration and the new
+  // ghost layout). One rank times nothing here (no synchronisation added).
+  PhaseTimers timers_{[] { exec_sync(Exec{}); }};
 };
 
 }  // namespace qdemsph
