@@ -177,7 +177,7 @@ def make_record(meta, launch, summary, facts, run_wall, status, note="") -> dict
         if par:
             rec["parallel"] = par
             for k in ("imbalance", "imbalance_initial", "halo_bytes_per_step", "migrated_bytes",
-                      "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "rebalances", "curve"):
+                      "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "fluid_rebuilds", "rebalances", "curve"):
                 rec[k] = par.get(k)
         c = summary.get("contact") or {}
         rec["items"] = {"tets": summary.get("n_tets") or 0, "vertices": summary.get("n_vertices") or 0,

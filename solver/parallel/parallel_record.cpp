@@ -7,6 +7,7 @@ void ParallelRecord::set_fluid(const FluidTraffic& t) {
       t.evaluations > 0 ? static_cast<double>(t.halo_bytes) / static_cast<double>(t.evaluations)
                         : 0.0;
   fluid_migrated_bytes = t.migrated_bytes + t.band_bytes;
+  fluid_rebuilds = t.rebuilds;
 }
 
 Json ParallelRecord::to_json() const {
@@ -20,6 +21,7 @@ Json ParallelRecord::to_json() const {
   j["halo_bytes_per_step"] = halo_bytes_per_step;
   j["fluid_halo_bytes_per_step"] = fluid_halo_bytes_per_step;
   j["fluid_migrated_bytes"] = fluid_migrated_bytes;
+  j["fluid_rebuilds"] = fluid_rebuilds;
   Json ov = Json::array(), ot = Json::array();
   for (auto n : owned_vertices) ov.push_back(n);
   for (auto n : owned_tets) ot.push_back(n);

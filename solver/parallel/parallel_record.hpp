@@ -13,6 +13,7 @@
 //                        layout rebuild and the refreshes of every step) per fluid evaluation
 //   fluid_migrated_bytes the fluid's bytes at its layout rebuilds: particles to new owners and
 //                        the allgathered border band cells (bytes x (ranks - 1))
+//   fluid_rebuilds       the fluid's layout rebuilds (distribute() calls), the first included
 //   owned_vertices, owned_tets   per rank: owned free vertices, home free tets (at the end)
 //   phases_max, phases_mean      per phase, seconds over ranks (kParallelPhases)
 //   rebalance_log        [{step, imbalance_before, imbalance_after, bytes}]; imbalance_after
@@ -48,6 +49,7 @@ struct ParallelRecord {
   double halo_bytes_per_step = 0;
   double fluid_halo_bytes_per_step = 0;
   std::int64_t fluid_migrated_bytes = 0;
+  std::int64_t fluid_rebuilds = 0;
   std::vector<std::int64_t> owned_vertices, owned_tets;
   std::map<std::string, double> phases_max, phases_mean;
   std::vector<RebalanceEntry> rebalance_log;

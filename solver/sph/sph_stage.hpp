@@ -162,6 +162,7 @@ class SphStage final : public FluidStage {
     if (ex_) {
       bool keep = false;
       {
+        exec_sync(Exec{});  // the work before is the step's (timers_ below)
         auto s = timers_.scope("sph.halo");
         keep = laid_out_ && ex_->keep(moved(), owned_cost());
       }
@@ -596,6 +597,7 @@ class SphStage final : public FluidStage {
   // double per column) are packed and unpacked where the arrays live; a GPU stage copies only
   // the records between device and host.
   void refresh_ghosts(const GhostColumns f) {
+    exec_sync(Exec{});  // the pass before is the step's, not the refresh's (its copy waits anyway)
     auto scope = timers_.scope("sph.halo");
     const std::int64_t ns = send_.size(), ng = n_ - n_own_, nown = n_own_;
     const int w = f.n;
@@ -712,7 +714,8 @@ class SphStage final : public FluidStage {
   std::unique_ptr<FluidExchange> ex_;              // null on one rank
   // Distributed: the layout's upkeep inside compute(), device work included: "sph.halo" (the
   // skin test and the ghost refreshes), "sph.rebuild" (redistribute(): migration and the new
-  // ghost layout). One rank times nothing here (no synchronisation added).
+  // ghost layout); each scope starts after a synchronisation, so the passes' device work is
+  // not counted in it. One rank times nothing here (no synchronisation added).
   PhaseTimers timers_{[] { exec_sync(Exec{}); }};
 };
 
