@@ -22,6 +22,13 @@ void cuda_index_copy(void*, const void*, const std::int64_t*, std::int64_t, std:
   no_cuda();
 }
 bool cuda_available() { return false; }
+void* staging_alloc(std::size_t bytes, bool* pinned) {
+  *pinned = false;
+  void* p = std::malloc(bytes > 0 ? bytes : 1);
+  if (!p) throw std::bad_alloc();
+  return p;
+}
+void staging_free(void* p, bool) noexcept { std::free(p); }
 #else
 void* cuda_alloc(std::size_t bytes);
 void cuda_free(void* p) noexcept;

@@ -4,6 +4,8 @@
 #include <cuda_runtime.h>
 
 #include <cstdio>
+#include <cstdlib>
+#include <new>
 #include <stdexcept>
 #include <string>
 
@@ -47,8 +49,10 @@ bool cuda_available() {
 
 namespace {
 int g_prefer = 0;
+bool g_device_used = false;  // this process has allocated GPU memory (staging_alloc pins)
 // Sets the preferred device once, before this process's first context is made.
 void use_preferred_device() {
+  g_device_used = true;
   static const bool done = [] {
     int n = 0;
     if (cudaGetDeviceCount(&n) == cudaSuccess && n > 0)
@@ -62,6 +66,27 @@ void use_preferred_device() {
 }  // namespace
 
 void cuda_prefer_device(int index) { g_prefer = index; }
+
+void* staging_alloc(std::size_t bytes, bool* pinned) {
+  const std::size_t n = bytes > 0 ? bytes : 1;
+  *pinned = g_device_used;
+  void* p = nullptr;
+  if (*pinned) {
+    QDEMSPH_CUDA_CHECK(cudaMallocHost(&p, n), "cudaMallocHost");
+    return p;
+  }
+  p = std::malloc(n);
+  if (!p) throw std::bad_alloc();
+  return p;
+}
+
+void staging_free(void* p, bool pinned) noexcept {
+  if (!p) return;
+  if (pinned)
+    cudaFreeHost(p);  // errors at teardown (driver already unloaded) are ignored
+  else
+    std::free(p);
+}
 
 void* cuda_alloc(std::size_t bytes) {
   if (!cuda_available())

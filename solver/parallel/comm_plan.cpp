@@ -132,7 +132,7 @@ std::span<std::byte> CommEngine::packed_send_buffer(std::size_t stride) {
   if (in_flight_) throw std::logic_error("comm plan: packing while an exchange is in flight");
   stride_ = stride;
   sendbuf_.resize(stride_ * send_off_[size_]);
-  return sendbuf_;
+  return {sendbuf_.data(), sendbuf_.size()};
 }
 
 void CommEngine::begin_packed() {

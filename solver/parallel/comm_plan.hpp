@@ -144,7 +144,7 @@ class CommEngine {
   std::vector<std::int64_t> send_off_, recv_off_;  // per rank, size + 1 entries
   std::vector<std::int64_t> send_index_;
   std::vector<int> nbrs_;
-  std::vector<std::byte> sendbuf_, recvbuf_;
+  StagingBytes sendbuf_, recvbuf_;  // page-locked on a GPU rank (core/memory.hpp)
   std::vector<MPI_Request> reqs_;
   std::size_t stride_ = 0;
   void post(Dir dir);  // posts receives and sends of the packed sendbuf_ (begin's second half)

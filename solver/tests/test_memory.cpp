@@ -1,5 +1,5 @@
 // Indexed copies within a memory space (core/memory.hpp): known answers on the host, the same
-// on a device (skipped without a GPU); the GPU of each rank.
+// on a device (skipped without a GPU); staging bytes; the GPU of each rank.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -45,6 +45,33 @@ TEST(Memory, GatherAndScatterOnTheDeviceMatchTheHost) {
   EXPECT_EQ(d.gathered, h.gathered);
   EXPECT_EQ(d.scattered, h.scattered);
   EXPECT_EQ(d.bytes, h.bytes);
+}
+
+// Staging bytes (a GPU rank's MPI halo buffers): plain memory until the process uses a GPU,
+// page-locked after; sizes grow without losing the storage's use, and device copies through
+// them round-trip.
+TEST(Memory, StagingBytesArePinnedOnceTheProcessUsesAGpu) {
+  StagingBytes s;
+  s.resize(16);
+  EXPECT_EQ(s.size(), 16u);
+  s[15] = std::byte{7};
+  s.resize(4);  // shrinking keeps the storage
+  EXPECT_EQ(s.size(), 4u);
+  if (!cuda_available()) {
+    s.resize(1 << 20);
+    EXPECT_FALSE(s.pinned());
+    GTEST_SKIP() << "no CUDA device: the page-locked half is not checked";
+  }
+  const std::vector<double> v = {1.5, -2.25, 3.0, 1e300};
+  Buffer<double> d(Space::Cuda);
+  d.assign(v);  // the process now uses a GPU
+  StagingBytes t;
+  t.resize(v.size() * sizeof(double));
+  EXPECT_TRUE(t.pinned());
+  space_copy(t.data(), Space::Host, d.cview().p, Space::Cuda, t.size());
+  Buffer<double> back(Space::Cuda, v.size());
+  space_copy(back.view().p, Space::Cuda, t.data(), Space::Host, t.size());
+  EXPECT_EQ(back.to_host(), v);
 }
 
 // An MPI rank's GPU: its rank on the node modulo the node's GPUs (parallel/world.cpp).
