@@ -25,12 +25,16 @@ Time per step of rank r (the step ends when the slowest rank ends):
        threshold None) the slowest rank's C_r stands.
   X_r  halo exchange, not hidden (overlap o in [0, 1] hides up to o C_r behind interior work):
        max(0, E [k_r a_intra + k'_r a_inter + b_intra_r / B_intra + b_inter_r / B_inter
-              + stage] - o C_r)
+              + stage] + R t_rt - o C_r)
        E exchanges per step (state gather, contact-force scatter-add / SPH density),
        k_r, k'_r neighbour ranks on / off the node, b bytes received per exchange
        (ghost vertices x vertex_bytes + ghost particles x particle_bytes, split on / off
        node), stage = 2 (a_stage + b_r / B_stage) when halo data crosses PCIe to be packed
-       on the host (today's CommEngine packs host arrays).
+       on the host (today's CommEngine packs host arrays); R host round trips per step of a
+       GPU rank (each: a device synchronisation, pack / unpack launches, host MPI progress;
+       bodies R = 3: the x, v halo, the contact shares, the skin test's allreduce; fluid
+       R = 4: the skin test, the x, v refresh and two rho, p, m refreshes), t_rt per round
+       trip (Network.round_trip: 0 on CPU ranks).
   s    per-rank jitter (relative standard deviation of a rank's step time): the expected
        maximum of N ranks grows as s sqrt(2 ln N) (Gaussian extreme value).
   A(N) allreduce(s) per step (dt, energies): n_ar ceil(log2 N) a (a_inter beyond one node).
@@ -80,6 +84,7 @@ class Network:
     stage_latency: float = 0.0  # per exchange and direction; 0 with stage_bandwidth 0: no staging
     stage_bandwidth: float = 0.0
     note: str = ""
+    round_trip: float = 0.0  # per host round trip of a GPU rank (Options.round_trips)
 
 
 # Defaults, stated (vendor figures, derated to what MPI typically achieves):
@@ -91,17 +96,24 @@ class Network:
 #    pinned/pageable copies of packed halos, ~10 us per copy + pack/unpack kernel launch.
 #  * Host shared memory (Open MPI vader, CMA single copy): ~0.5 us, ~5-10 GB/s per pair
 #    (4.7 GB/s measured for 16 MB messages on the 2-core dev VM, `scaling/pingpong.c`).
+#  * Host round trip of a GPU rank: 150 us, calibrated on the two-H100 host (2026-11-25, pinned
+#    staging, references/benchmarks/scaling/2026-11-25_h100x2/): topple-weak on 2 GPUs took
+#    1.70 ms/step against 1.25 predicted without it, (1.70 - 1.25) / 3 round trips; with it the
+#    model gives cubes-weak 5.82 (measured 5.99) and dambreak-weak 6.70 (measured 7.06) ms/step.
 NETWORKS = {
     # What the code does today on GPUs: halo packed on the host (D2H, MPI, H2D).
-    "staged-ndr": Network("staged-ndr", 0.5e-6, 8e9, 2e-6, 45e9, 8, 10e-6, 25e9,
-                          "GPU halos staged through host memory over PCIe Gen5; host MPI over shared "
-                          "memory on a node and InfiniBand NDR between nodes; 8 GPUs per node"),
+    "staged-ndr": Network("staged-ndr", 0.5e-6, 8e9, 2e-6, 45e9, 8, 10e-6, 25e9, round_trip=150e-6,
+                          note="GPU halos staged through host memory over PCIe Gen5; host MPI over shared "
+                          "memory on a node and InfiniBand NDR between nodes; 8 GPUs per node; "
+                          "150 us per host round trip (measured, two H100s)"),
     # With GPU-resident pack/unpack and CUDA-aware MPI (docs/parallel.md: not done yet).
     "cuda-aware-ndr": Network("cuda-aware-ndr", 3e-6, 150e9, 3e-6, 45e9, 8, 0.0, 0.0,
-                              "GPU-resident halos, CUDA-aware MPI: NVLink 4 on a node, GPUDirect RDMA "
-                              "over InfiniBand NDR between nodes; 8 GPUs per node"),
-    "staged-hdr": Network("staged-hdr", 0.5e-6, 8e9, 2e-6, 22e9, 4, 10e-6, 20e9,
-                          "host-staged halos, InfiniBand HDR 200 Gb/s, 4 GPUs per node"),
+                              note="GPU-resident halos, CUDA-aware MPI: NVLink 4 on a node, GPUDirect RDMA "
+                              "over InfiniBand NDR between nodes; 8 GPUs per node; no host round trips "
+                              "(a bound: stream-ordered exchanges, not built)"),
+    "staged-hdr": Network("staged-hdr", 0.5e-6, 8e9, 2e-6, 22e9, 4, 10e-6, 20e9, round_trip=150e-6,
+                          note="host-staged halos, InfiniBand HDR 200 Gb/s, 4 GPUs per node; 150 us per host "
+                          "round trip (measured, two H100s)"),
     # CPU ranks (one per core) on one node; between nodes InfiniBand NDR shared by the node's ranks.
     "cpu-shm": Network("cpu-shm", 0.5e-6, 5e9, 2e-6, 45e9 / 64, 64, 0.0, 0.0,
                        "CPU ranks: Open MPI shared memory on a node (~0.5 us, 5 GB/s per pair); "
@@ -119,6 +131,7 @@ class Options:
     #                               geometry-predicted ghost, 2 CPU ranks of the cube block)
     particle_bytes: float = 112.0  # SPH: x, v, rho, p, then rho, p again (assumed)
     exchanges: int = 1            # halo exchanges per step (each: one message per neighbour)
+    round_trips: int = 0          # host round trips per step of a GPU rank (x Network.round_trip)
     overlap: float = 0.0          # share of the compute that can hide communication (0: none)
     jitter: float = 0.01          # s: relative std. deviation of a rank's step time
     ghost_particle_work: float = 0.15  # ghosts are binned/sorted; density and forces loop over owned
@@ -159,10 +172,17 @@ def _terms(geo: dict, r: int, costs: Costs, net: Network, opt: Options, N: int) 
     lat = (k - k_off) * net.intra_latency + k_off * net.inter_latency
     bw = (b_on / net.intra_bandwidth if b_on else 0.0) + (b_off / net.inter_bandwidth if b_off else 0.0)
     stage = 2 * (net.stage_latency + (b_on + b_off) / net.stage_bandwidth) if net.stage_bandwidth > 0 else 0.0
-    X = opt.exchanges * (lat + bw + stage)
+    rt = opt.round_trips * net.round_trip
+    X = opt.exchanges * (lat + bw + stage) + rt
     return {"compute": C, "exchange_raw": X, "exchange": max(0.0, X - opt.overlap * C),
             "latency": opt.exchanges * lat, "bandwidth": opt.exchanges * bw, "staging": opt.exchanges * stage,
+            "round_trips": rt,
             "bytes": b_on + b_off, "bytes_offnode": b_off}
+
+
+def round_trips(has_fluid: bool) -> int:
+    """Host round trips per step of a GPU rank (module docstring): fluid 4, bodies 3."""
+    return 4 if has_fluid else 3
 
 
 def step_time(geo: dict, costs: Costs, net: Network, opt: Options) -> dict:
@@ -200,7 +220,8 @@ def step_time(geo: dict, costs: Costs, net: Network, opt: Options) -> dict:
     return {"ranks": N, "geometry_from_ranks": n_rows, "step_s": T, "critical_rank": xr, "compute_s": compute,
             "compute_mean_s": mean_c, "exchange_s": x["exchange"], "exchange_raw_s": x["exchange_raw"],
             "latency_s": x.get("latency", 0.0), "bandwidth_s": x.get("bandwidth", 0.0),
-            "staging_s": x.get("staging", 0.0), "halo_bytes_per_exchange": x.get("bytes", 0.0),
+            "staging_s": x.get("staging", 0.0), "round_trip_s": x.get("round_trips", 0.0),
+            "halo_bytes_per_exchange": x.get("bytes", 0.0),
             "jitter_s": busy * jit, "allreduce_s": ar, "rebalance_s": reb, "rebalanced": balanced,
             "imbalance_static": static_imb, "imbalance": compute / mean_c - 1 if mean_c > 0 else 0.0}
 
@@ -310,6 +331,8 @@ def main(argv=None):
     p.add_argument("--jitter", type=float, default=0.01)
     p.add_argument("--threshold", type=float, default=0.10, help="rebalance threshold (the stepper's default 0.10)")
     p.add_argument("--static", action="store_true", help="static partition (no rebalancing)")
+    p.add_argument("--round-trips", type=int, default=None,
+                   help="host round trips per step of a GPU rank (default: 4 with fluid, else 3)")
     p.add_argument("--ghost-pairs", type=float, default=1.4,
                    help="k, candidate pairs of a ghost surface vertex per owned one (1.4 measured; 0: pairs once)")
     p.add_argument("--json", help="write the prediction here")
@@ -349,11 +372,15 @@ def main(argv=None):
     ppv = a.pairs_per_surface_vertex
     if ppv is None:
         ppv = json.loads((HERE / "costs.json").read_text()).get("pairs_per_surface_vertex", {}).get(geo.get("sweep") or "", 0.0)
+    rt = a.round_trips
+    if rt is None:
+        rt = round_trips(any(sum(g.get("owned_particles", [0])) > 0 for g in geo["rows"]))
     opt = Options(overlap=a.overlap, jitter=a.jitter, pairs_per_surface_vertex=ppv, ghost_pair_weight=a.ghost_pairs,
-                  rebalance_threshold=None if a.static else a.threshold)
+                  rebalance_threshold=None if a.static else a.threshold, round_trips=rt)
     pred = predict(rows, costs, NETWORKS[a.network], opt)
     print(f"PREDICTION (model, not a measurement): {geo.get('sweep')} ({geo.get('backend_preset')} preset), "
           f"costs {a.costs}, network {a.network}, overlap {a.overlap}, jitter {a.jitter}, ghost pairs k {a.ghost_pairs}, "
+          f"round trips {rt}, "
           f"{'static partition' if a.static else f'rebalance threshold {a.threshold}'}")
     print(f"{'N':>5} {'ms/step':>9} {'compute':>9} {'exch':>8} {'lat':>7} {'bw':>7} {'stage':>7} {'imb %':>6} {'E vs 1':>7} {'E vs 8':>7}")
     for o in pred:

@@ -108,7 +108,8 @@ def model_line(rs, sweep, backend, ranks):
     geo = json.loads(gfile.read_text())
     net = model.NETWORKS["staged-ndr" if backend == "cuda" else "cpu-shm"]
     rows = [g for g in model.extend_rows(geo["rows"], ranks) if g["ranks"] in ranks]
-    opt = model.Options(pairs_per_surface_vertex=c.get("pairs_per_surface_vertex", 0.0))
+    opt = model.Options(pairs_per_surface_vertex=c.get("pairs_per_surface_vertex", 0.0),
+                        round_trips=model.round_trips(bool((one.get("items") or {}).get("particles"))))
     return model.predict(rows, costs, net, opt), net.name
 
 

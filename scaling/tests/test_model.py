@@ -160,3 +160,16 @@ def test_contact_work_counts_owned_and_ghost_surface():
     assert p["compute_s"] == pytest.approx(130 * 20 * 1e-6)
     q = model.step_time(g, c, model.NETWORKS["ideal"], replace(NOJIT, pairs_per_surface_vertex=20.0, ghost_pair_weight=0.0))
     assert q["compute_s"] == pytest.approx(100 * 20 * 1e-6)
+
+
+def test_host_round_trips_add_a_fixed_time_per_step():
+    net = replace(NET, intra_latency=0.0, intra_bandwidth=math.inf, round_trip=1.5e-4)
+    g = rows([2])[0]
+    none = model.step_time(g, COSTS, net, NOJIT)
+    three = model.step_time(g, COSTS, net, replace(NOJIT, round_trips=3))
+    assert none["round_trip_s"] == 0.0
+    assert three["round_trip_s"] == pytest.approx(4.5e-4)
+    assert three["step_s"] - none["step_s"] == pytest.approx(4.5e-4)
+    one_rank = model.step_time(rows([1])[0], COSTS, net, replace(NOJIT, round_trips=3))
+    assert one_rank["step_s"] == pytest.approx(1000 * 1e-9 + 200 * 1e-9)  # no exchange on one rank
+    assert model.round_trips(True) == 4 and model.round_trips(False) == 3
