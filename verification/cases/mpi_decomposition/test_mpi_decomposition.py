@@ -15,7 +15,8 @@ from harness.qdemsph import mpirun_command
 
 HERE = Path(__file__).resolve().parent
 PARALLEL_KEYS = {"ranks", "curve", "rebalances", "imbalance", "imbalance_initial", "migrated_bytes",
-                 "halo_bytes_per_step", "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "owned_vertices",
+                 "halo_bytes_per_step", "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "fluid_rebuilds",
+                 "owned_vertices",
                  "owned_tets", "phases_max", "phases_mean", "rebalance_log"}
 PHASES = {"elements", "integration", "contact", "sph", "halo", "migration", "balance", "output"}
 # Rebalance (and migrate) at every measurement so that the run crosses many decompositions.
@@ -236,5 +237,9 @@ def test_fluid_same_as_one_rank(qdemsph, checks, case_out):
     checks.check("fluid.np2.fluid_halo_bytes_per_step", p2["fluid_halo_bytes_per_step"], kind="min", tolerance=1.0,
                  unit="B", note="the fluid's ghost fill and refreshes per fluid evaluation, all ranks (docs/parallel.md)")
     checks.check("fluid.np2.fluid_migrated_bytes", p2["fluid_migrated_bytes"], kind="min", tolerance=1.0, unit="B")
+    checks.check("fluid.np1.fluid_rebuilds", p1["fluid_rebuilds"], kind="max", tolerance=0,
+                 note="one process has no fluid layout to rebuild")
+    checks.check("fluid.np2.fluid_rebuilds", p2["fluid_rebuilds"], kind="min", tolerance=2,
+                 note="the first layout and at least one re-cut (parallel.rebalance_every 25, threshold 0)")
     checks.info("fluid.np2.wall", two.solver_wall_s, unit="s", wall_s=two.solver_wall_s)
     checks.require()
