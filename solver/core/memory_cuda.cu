@@ -52,7 +52,6 @@ int g_prefer = 0;
 bool g_device_used = false;  // this process has allocated GPU memory (staging_alloc pins)
 // Sets the preferred device once, before this process's first context is made.
 void use_preferred_device() {
-  g_device_used = true;
   static const bool done = [] {
     int n = 0;
     if (cudaGetDeviceCount(&n) == cudaSuccess && n > 0)
@@ -105,6 +104,7 @@ void* cuda_alloc(std::size_t bytes) {
                      " (use a coarser mesh or more GPUs)");
   }
   QDEMSPH_CUDA_CHECK(e, "cudaMalloc");
+  g_device_used = true;
   return p;
 }
 
