@@ -46,6 +46,10 @@ def add_piece(mat, x, y, tilt_deg, size, sink=0.0, omega0=0.0):
     verts = common.shogi_tilt_frame(tilt_deg, (x, y, -sink if tilt_deg == 0 else 0.0), size)
     bid = ys.add_polyhedron(mat, verts)
     if omega0:
+        # NB (2026-11-25): YADE 2023.02a's NewtonIntegrator integrates an aspherical body's
+        # rotation from state.angMom (zero here) and overwrites angVel at the first step, so the
+        # spin set below is lost: the piece starts with only its centre's velocity (README.md,
+        # "Frictionless chain"). Kept as it is so that the stored chain runs stay reproducible.
         h, w, t = common.SHOGI_SIZES[size] if isinstance(size, str) else size
         st = O.bodies[bid].state
         st.angVel = Vector3(0.0, omega0, 0.0)
