@@ -52,7 +52,6 @@ from __future__ import annotations
 
 import argparse
 import datetime as _dt
-import hashlib
 import json
 import os
 import platform
@@ -75,6 +74,8 @@ for _h in logging.getLogger().handlers:
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]
 sys.path.insert(0, str(REPO / "verification"))
+sys.path.insert(0, str(HERE))
+from cantilever import sha256_file  # noqa: E402
 from harness import machine  # noqa: E402
 
 # Gate, rubber and water (BENCHMARKS.md section 7; the scenes of sph_elastic_gate).
@@ -96,14 +97,6 @@ MODELS = [("linear", "dead"), ("svk", "follower"), ("svk", "dead"), ("nh", "foll
 STATES = ["stress", "strain"]
 FIELDS = ["mesh", "nx", "ny", "dofs", "state", "model", "load", "H", "tip_x", "tip_y", "beam_eb",
           "beam_timoshenko", "elastica_x", "elastica_y", "elastica_axis_x", "newton_its", "solve_s"]
-
-
-def sha256_file(path):
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
 
 
 def lame(E, nu):
