@@ -137,6 +137,14 @@ void on_root(bool distributed, F&& write) {
   write();
 }
 
+// Distributed: every rank waits for the others here (after rank 0's file writes).
+void wait_all_ranks(bool distributed) {
+#ifdef QDEMSPH_HAVE_MPI
+  if (distributed) world_barrier();
+#endif
+  (void)distributed;
+}
+
 // The fluid step H and the solid sub-steps k (H = k x the solid's dt): a fixed run.dt is
 // shared (k = 1); otherwise as many solid steps as fit in the fluid's limit (at most
 // fluid.solid_substeps).
@@ -319,6 +327,8 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   // The step of the last field frame and probe row (the end of the run adds them once).
   std::int64_t last_field_step = restart ? resume.last_field_step : -1;
   std::int64_t last_probe_step = restart ? resume.last_probe_step : -1;
+  // Distributed: the other ranks wait for rank 0's write inside the scope, so the time goes
+  // to "output" on every rank, not to the next step's first exchange.
   auto write_fields = [&](bool stress) {
     auto scope = timers.scope("output");
     last_field_step = st.steps();
@@ -333,6 +343,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
           fluid_out->write(st.time(), st.steps(), fh.x, fh.v, fh.p, fh.rho, fh.type, fh.gid);
         });
     }
+    wait_all_ranks(distributed);
   };
   auto write_probes = [&] {
     auto scope = timers.scope("output");
@@ -346,18 +357,21 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       const FluidStats fs = fluid->stats();
       const FluidHost fh = fluid->download();
       const double dt_limit = fluid->dt_limits().min();
-      if (!root) return;
-      double xm = -1e300, ym = -1e300;
-      for (std::size_t i = 0; i < fh.x.size(); ++i)
-        if (fh.type[i] == kSphFluid) xm = std::max(xm, fh.x[i].x), ym = std::max(ym, fh.x[i].y);
-      fmt::print(
-          fluid_csv,
-          "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.6g},{:.9g},{:.9g},"
-          "{:.9g}\n",
-          st.time(), fs.kinetic, fs.momentum.x, fs.momentum.y, fs.momentum.z, fs.v_max, fs.rho_dev,
-          xm, ym, dt_limit, fs.force_on_bodies.x, fs.force_on_bodies.y, fs.force_on_bodies.z);
-      std::fflush(fluid_csv);
+      if (root) {
+        double xm = -1e300, ym = -1e300;
+        for (std::size_t i = 0; i < fh.x.size(); ++i)
+          if (fh.type[i] == kSphFluid) xm = std::max(xm, fh.x[i].x), ym = std::max(ym, fh.x[i].y);
+        fmt::print(
+            fluid_csv,
+            "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.6g},{:.6g},{:.9g},{:.9g},{:.6g},{:.9g},{:.9g},"
+            "{:.9g}\n",
+            st.time(), fs.kinetic, fs.momentum.x, fs.momentum.y, fs.momentum.z, fs.v_max,
+            fs.rho_dev, xm, ym, dt_limit, fs.force_on_bodies.x, fs.force_on_bodies.y,
+            fs.force_on_bodies.z);
+        std::fflush(fluid_csv);
+      }
     }
+    wait_all_ranks(distributed);
   };
   auto finish = [&](const std::string& status, std::int64_t steps) {
     summary["status"] = status;

@@ -160,6 +160,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     CommEngine& e = halo_->engine();
     {
       auto s = timers_.scope("halo");
+      auto s1 = timers_.scope("halo.xv");
       auto buf = e.packed_send_buffer(6 * sizeof(double));
       local_->pack_halo(reinterpret_cast<double*>(buf.data()));
       e.begin_packed();
@@ -170,6 +171,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
     {
       auto s = timers_.scope("halo");
+      auto s1 = timers_.scope("halo.xv");
       const auto in = e.finish_packed();
       local_->unpack_halo(reinterpret_cast<const double*>(in.data()));
       halo_bytes_ += e.last_bytes();
@@ -179,11 +181,13 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       auto s = timers_.scope("elements");
       local_->element_forces(L_.n_interior, static_cast<std::int64_t>(L_.tets.size()), dt_diss);
       local_->assemble_forces(dt_diss, alpha);
+      auto s1 = timers_.scope("elements.shares");
       out = local_->contact_shares();
     }
     std::vector<ContactShare> in;
     if (contact_) {
       auto s = timers_.scope("halo");
+      auto s1 = timers_.scope("halo.shares");
       in = exchange_shares(out);
     }
     {
@@ -329,18 +333,28 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     return static_cast<std::size_t>(all);
   }
 
-  // Contact sub-phases: the largest over ranks (parallel.phases_* has max and mean).
+  // Sub-phases, the largest over ranks (parallel.phases_* has max and mean of the phases):
+  // contact's, and where the halo and elements time of a step goes (halo.skin: the contact
+  // band's displacement test; halo.xv: the ghosts' x, v; halo.shares: the contact force shares'
+  // exchange; elements.shares: collecting them from the backend).
   std::map<std::string, double> stage_seconds() const override {
-    if (!contact_) return {};
-    const std::map<std::string, double> mine = local_stage_seconds();
-    const char* keys[] = {"contact.broad", "contact.narrow", "contact.force"};
-    double v[3], mx[3];
-    for (int k = 0; k < 3; ++k) {
+    std::map<std::string, double> mine = local_stage_seconds();
+    for (const auto& [k, v] : timers_.seconds())
+      if (k.find('.') != std::string::npos) mine[k] = v;
+    static constexpr const char* keys[] = {"contact.broad", "contact.narrow", "contact.force",
+                                           "halo.skin",     "halo.xv",        "halo.shares",
+                                           "elements.shares"};
+    constexpr int n = std::size(keys);
+    double v[n], mx[n];
+    for (int k = 0; k < n; ++k) {
       const auto it = mine.find(keys[k]);
       v[k] = it == mine.end() ? 0.0 : it->second;
     }
-    MPI_Allreduce(v, mx, 3, MPI_DOUBLE, MPI_MAX, comm_);
-    return {{keys[0], mx[0]}, {keys[1], mx[1]}, {keys[2], mx[2]}};
+    MPI_Allreduce(v, mx, n, MPI_DOUBLE, MPI_MAX, comm_);
+    std::map<std::string, double> out;
+    for (int k = 0; k < n; ++k)
+      if (contact_ || k >= 3) out[keys[k]] = mx[k];
+    return out;
   }
 
   // Counts summed over ranks (records and active ones: each once; candidate pairs of
@@ -750,6 +764,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   void maybe_rebuild(bool dynamic) {
     bool rebuild = false, rebalance = false;
     if (contact_) {
+      auto s = timers_.scope("halo");
+      auto s1 = timers_.scope("halo.skin");
       const double moved = local_->max_moved();
       double m = 0;
       MPI_Allreduce(&moved, &m, 1, MPI_DOUBLE, MPI_MAX, comm_);

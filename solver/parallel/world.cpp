@@ -52,6 +52,10 @@ bool world_all(bool ok) {
   return all != 0;
 }
 
+void world_barrier() {
+  if (g_world.mpi) MPI_Barrier(MPI_COMM_WORLD);
+}
+
 void world_abort(int code) {
   if (g_world.mpi) MPI_Abort(MPI_COMM_WORLD, code);
   std::exit(code);

@@ -22,6 +22,8 @@ void world_stop();
 const World& world();
 // True on every rank when `ok` is true on every rank (collective; `ok` itself without MPI).
 bool world_all(bool ok);
+// Waits for every rank (MPI_Barrier; nothing without MPI).
+void world_barrier();
 // Ends every rank with this exit code (MPI_Abort), for an error that only some ranks saw.
 [[noreturn]] void world_abort(int code);
 

@@ -164,6 +164,7 @@ class SphStage final : public FluidStage {
       {
         exec_sync(Exec{});  // the work before is the step's (timers_ below)
         auto s = timers_.scope("sph.halo");
+        auto s1 = timers_.scope("sph.halo.skin");
         keep = laid_out_ && ex_->keep(moved(), owned_cost());
       }
       if (keep) {
@@ -615,7 +616,11 @@ class SphStage final : public FluidStage {
           for (int c = 0; c < w; ++c) pk[w * k + c] = f.c[c][i];
         });
     if constexpr (S != Space::Host) space_copy(out.data(), Space::Host, pk, S, out.size());
-    const std::span<const std::byte> in = ex_->refresh();
+    std::span<const std::byte> in;
+    {
+      auto s1 = timers_.scope("sph.halo.mpi");
+      in = ex_->refresh();
+    }
     const double* rv = reinterpret_cast<const double*>(in.data());
     if constexpr (S != Space::Host) {
       space_copy(pack_.view().p, S, in.data(), Space::Host, in.size());
@@ -713,9 +718,11 @@ class SphStage final : public FluidStage {
   std::unique_ptr<SolidCoupling<Exec>> coupling_;  // null without bodies
   std::unique_ptr<FluidExchange> ex_;              // null on one rank
   // Distributed: the layout's upkeep inside compute(), device work included: "sph.halo" (the
-  // skin test and the ghost refreshes), "sph.rebuild" (redistribute(): migration and the new
-  // ghost layout); each scope starts after a synchronisation, so the passes' device work is
-  // not counted in it. One rank times nothing here (no synchronisation added).
+  // skin test and the ghost refreshes; of it "sph.halo.skin" the test, "sph.halo.mpi" the
+  // messages of the refreshes, without packing and copies), "sph.rebuild" (redistribute():
+  // migration and the new ghost layout); each scope starts after a synchronisation, so the
+  // passes' device work is not counted in it. One rank times nothing here (no
+  // synchronisation added).
   PhaseTimers timers_{[] { exec_sync(Exec{}); }};
 };
 
