@@ -25,13 +25,14 @@ Launch (stated in every record under `launch`):
            decomposition's own: E(N) = t(1)/t(N) = [t(1)/t_copies(N)] x [t_copies(N)/t(N)].
 
 Time per step. `step_s` = sum over the top-level phases of summary.json (per-rank mean
-`parallel.phases_mean` when distributed, else `phases`) without "output", "migration" and
-"balance", / steps: the stepping loop (elements, integration, contact, sph, halo exchange)
-without field snapshots, set-up, and (re)partitioning, whose first instance (moving every
-item from its start slice to its owner) is set-up counted in those phases. `step_s_all`
-adds "migration" and "balance" (what the balancer costs: the balancer comparison uses it,
-over runs long enough to amortise the first distribution). `wall_s` is the whole process.
-Weak/strong efficiency (report.py) uses step_s.
+`parallel.phases_mean` when distributed, else `phases`) without "output", / steps: the
+stepping loop (elements, integration, contact, sph, halo exchange, and the rebalances and
+layout rebuilds during the run: "migration", "balance") without field snapshots and set-up.
+The first distribution (every item from its start slice to its owner, the fluid's first
+layout) is set-up, `parallel.setup_s`, outside the phases; `step_s_all` adds it (the
+balancer comparison uses it, over runs long enough to amortise it). `wall_s` is the whole
+process. Weak/strong efficiency (report.py) uses step_s. Records before schema
+qdemsph.scaling.run/2 left "migration" and "balance" out of step_s (they mixed the set-up in).
 
 A run on N > 1 ranks whose summary.json has no `parallel.ranks == N` ran N independent
 copies (a binary without the distributed stepper): it is recorded as status
@@ -57,7 +58,7 @@ REPO = HERE.parent
 sys.path.insert(0, str(HERE))
 import scenes  # noqa: E402
 
-SCHEMA = "qdemsph.scaling.run/1"
+SCHEMA = "qdemsph.scaling.run/2"
 PHASES = ("elements", "integration", "contact", "sph", "halo", "migration", "balance", "output")
 
 
@@ -140,7 +141,7 @@ def launch_command(launcher: str, ranks: int, threads: int, backend: str, cores:
     return cmd + extra, env, facts
 
 
-NOT_STEP = ("output", "migration", "balance")  # not in step_s (step_s_all has the last two)
+NOT_STEP = ("output",)  # not in step_s; step_s_all adds parallel.setup_s
 
 
 def step_seconds(summary: dict) -> dict:
@@ -149,7 +150,8 @@ def step_seconds(summary: dict) -> dict:
     top = {k: float(v) for k, v in src.items() if "." not in k}
     steps = max(int(summary.get("steps") or 0), 1)
     loop = sum(v for k, v in top.items() if k not in NOT_STEP)
-    out = {"step_s": loop / steps, "step_s_all": (loop + top.get("migration", 0.0) + top.get("balance", 0.0)) / steps,
+    setup = float(par.get("setup_s") or 0.0)
+    out = {"step_s": loop / steps, "step_s_all": (loop + setup) / steps, "setup_s": setup,
            "phases_per_step": {k: v / steps for k, v in top.items()},
            "phase_source": "parallel.phases_mean" if par.get("phases_mean") else "phases"}
     if par.get("phases_max"):

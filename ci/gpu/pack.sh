@@ -7,7 +7,8 @@
 # branch. Carry PACK to the GPU machine and run PACK/ci/gpu_session.sh OUTDIR there; it sets
 # LD_LIBRARY_PATH=PACK/lib. Uses ccache when present.
 # PACK_MPI=1 (opt-in, for scaling/gpu_sweep.sh): build with MPI (QDEMSPH_MPI=ON) into
-# build-cuda-mpi and pack build-cuda-mpi-pack (+ REVISION); the GPU machines have Open MPI
+# build-cuda-mpi and pack build-cuda-mpi-pack (+ REVISION, + qdemsph_mpi_tests, whose
+# device-resident halo test needs GPUs: mpirun -np 2 bin/qdemsph_mpi_tests); the GPU machines have Open MPI
 # 4.1.6 (libmpi.so.40), so libmpi is not packed.
 #
 # gmsh: the GPU machines have none, and libgmsh pulls in ~300 MB (OpenCASCADE, FLTK, ...).
@@ -27,10 +28,12 @@ if command -v ccache >/dev/null; then
 fi
 cmake -S . -B "$BUILD" -DQDEMSPH_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90 -DQDEMSPH_MPI=$MPI \
   -DCMAKE_BUILD_TYPE=Release "${LAUNCH[@]}" >/dev/null
-cmake --build "$BUILD" -j "$JOBS" --target qdemsph qdemsph_tests qdemsph_bench
+BINS=(qdemsph qdemsph_tests qdemsph_bench)
+if [ $MPI = ON ]; then BINS+=(qdemsph_mpi_tests); fi  # the device-resident halo's test
+cmake --build "$BUILD" -j "$JOBS" --target "${BINS[@]}"
 rm -rf "$PACK"
 mkdir -p "$PACK/bin" "$PACK/lib"
-cp "$BUILD"/bin/qdemsph "$BUILD"/bin/qdemsph_tests "$BUILD"/bin/qdemsph_bench "$PACK/bin/"
+for b in "${BINS[@]}"; do cp "$BUILD/bin/$b" "$PACK/bin/"; done
 strip "$PACK"/bin/* || true
 if [ $MPI = ON ]; then git rev-parse --short HEAD >"$PACK/REVISION" 2>/dev/null || true; fi
 

@@ -25,14 +25,16 @@ def test_mpirun_binding_and_flags():
 
 
 def test_step_seconds_prefers_the_rank_mean_and_drops_output_and_subphases():
+    # In-run migration and balance are part of the step; the first distribution (setup_s) is not.
     s = {"steps": 10, "phases": {"elements": 5.0, "output": 9.0},
          "parallel": {"phases_mean": {"elements": 1.0, "contact": 0.5, "contact.broad": 0.2, "halo": 0.5,
                                       "output": 3.0, "migration": 0.4, "balance": 0.1},
-                      "phases_max": {"elements": 1.2, "contact": 0.5, "halo": 0.6, "output": 3.0, "migration": 1.0}}}
+                      "phases_max": {"elements": 1.2, "contact": 0.5, "halo": 0.6, "output": 3.0, "migration": 1.0},
+                      "setup_s": 0.3}}
     t = run.step_seconds(s)
-    assert t["step_s"] == pytest.approx(0.2) and t["phase_source"] == "parallel.phases_mean"
-    assert t["step_s_all"] == pytest.approx(0.25)
-    assert t["step_s_maxsum"] == pytest.approx(0.23)
+    assert t["step_s"] == pytest.approx(0.25) and t["phase_source"] == "parallel.phases_mean"
+    assert t["step_s_all"] == pytest.approx(0.28) and t["setup_s"] == pytest.approx(0.3)
+    assert t["step_s_maxsum"] == pytest.approx(0.33)
     serial = run.step_seconds({"steps": 4, "phases": {"elements": 2.0, "output": 1.0, "contact.narrow": 1.0}})
     assert serial["step_s"] == pytest.approx(0.5)
 

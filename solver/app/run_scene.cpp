@@ -205,7 +205,9 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
     // Under mpirun the particles are distributed too (parallel/fluid_exchange.hpp).
     std::unique_ptr<FluidExchange> exchange;
 #ifdef QDEMSPH_HAVE_MPI
-    if (distributed) exchange = make_fluid_exchange(parallel_options(scene.parallel), *fluid_setup);
+    if (distributed)
+      exchange = make_fluid_exchange(parallel_options(scene.parallel), *fluid_setup,
+                                     backend_name == "cuda" ? Space::Cuda : Space::Host);
     fluid_exchange = exchange.get();
 #endif
     SolidViews solid;
@@ -402,7 +404,8 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
       summary["contact"] = cj;
     }
     // A distributed fluid's upkeep inside "sph" (the skin test and ghost refreshes, the layout
-    // rebuilds) as sub-phases sph.halo / sph.rebuild; "sph" stays the whole fluid step.
+    // rebuilds, the first layout) as sub-phases sph.halo / sph.rebuild / sph.setup; "sph"
+    // stays the whole fluid step.
     if (fluid)
       for (const auto& [k, v] : fluid->stage_seconds()) phases[k] = phase_map[k] = v;
     summary["phases"] = phases;

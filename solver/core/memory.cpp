@@ -22,6 +22,10 @@ void cuda_index_copy(void*, const void*, const std::int64_t*, std::int64_t, std:
   no_cuda();
 }
 bool cuda_available() { return false; }
+void cuda_sync() {}
+CudaIpcHandle cuda_ipc_handle(void*) { no_cuda(); }
+void* cuda_ipc_open(const CudaIpcHandle&) { no_cuda(); }
+void cuda_ipc_close(void*) noexcept {}
 void* staging_alloc(std::size_t bytes, bool* pinned) {
   *pinned = false;
   void* p = std::malloc(bytes > 0 ? bytes : 1);

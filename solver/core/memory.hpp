@@ -34,6 +34,17 @@ bool cuda_available();
 // node (parallel/world.cpp), so the ranks of a node spread over its GPUs.
 void cuda_prefer_device(int index);
 int cuda_device_for(int index, int devices);  // index mod devices (0 without devices)
+// Waits for this process's device work (cudaDeviceSynchronize; nothing without CUDA).
+void cuda_sync();
+// CUDA IPC between processes of one node: the handle of a device allocation of this process
+// (a pointer cuda_alloc returned), and another process's allocation mapped into this one by
+// its handle (a device pointer here; peer copies from it go over NVLink where there is one).
+struct CudaIpcHandle {
+  unsigned char bytes[64];
+};
+CudaIpcHandle cuda_ipc_handle(void* p);
+void* cuda_ipc_open(const CudaIpcHandle& h);
+void cuda_ipc_close(void* p) noexcept;
 // Host memory for staging (StagingBytes): page-locked once this process has allocated GPU
 // memory, plain heap memory before (a CPU run never makes a GPU context); *pinned says which.
 void* staging_alloc(std::size_t bytes, bool* pinned);

@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -115,6 +116,31 @@ void cuda_free(void* p) noexcept {
 void cuda_copy(void* dst, Space, const void* src, Space, std::size_t bytes) {
   // Unified addressing: the runtime infers the direction from the pointers.
   QDEMSPH_CUDA_CHECK(cudaMemcpy(dst, src, bytes, cudaMemcpyDefault), "cudaMemcpy");
+}
+
+void cuda_sync() { QDEMSPH_CUDA_CHECK(cudaDeviceSynchronize(), "cudaDeviceSynchronize"); }
+
+static_assert(sizeof(cudaIpcMemHandle_t) == sizeof(CudaIpcHandle));
+
+CudaIpcHandle cuda_ipc_handle(void* p) {
+  cudaIpcMemHandle_t h;
+  QDEMSPH_CUDA_CHECK(cudaIpcGetMemHandle(&h, p), "cudaIpcGetMemHandle");
+  CudaIpcHandle out;
+  std::memcpy(out.bytes, &h, sizeof h);
+  return out;
+}
+
+void* cuda_ipc_open(const CudaIpcHandle& h) {
+  cudaIpcMemHandle_t c;
+  std::memcpy(&c, h.bytes, sizeof c);
+  void* p = nullptr;
+  QDEMSPH_CUDA_CHECK(cudaIpcOpenMemHandle(&p, c, cudaIpcMemLazyEnablePeerAccess),
+                     "cudaIpcOpenMemHandle");
+  return p;
+}
+
+void cuda_ipc_close(void* p) noexcept {
+  if (p) cudaIpcCloseMemHandle(p);  // errors at teardown are ignored
 }
 
 void cuda_zero(void* p, std::size_t bytes) {

@@ -134,12 +134,16 @@ class Backend {
   virtual std::vector<ContactShare> contact_shares() = 0;
   virtual void add_contact_forces(const std::vector<ContactShare>& in) = 0;
   // Halo exchange of x and v by index lists, packed where the data lives (on the GPU for
-  // CUDA): pack_halo writes 6 doubles (x, v) per entry of send_index, item-major, to host
-  // memory `out`; unpack_halo reads n_recv such records into vertices recv_base + k.
+  // CUDA): pack_halo writes 6 doubles (x, v) per entry of send_index, item-major, to `out`
+  // in memory space `where`; unpack_halo reads n_recv such records from `in` (in `where`)
+  // into vertices recv_base + k. Records in the backend's own space() are written and read
+  // there directly (a GPU rank's device-resident halo); others pass through one copy.
   virtual void set_halo(const std::vector<std::int64_t>& send_index, std::int64_t recv_base,
                         std::int64_t n_recv) = 0;
-  virtual void pack_halo(double* out) = 0;
-  virtual void unpack_halo(const double* in) = 0;
+  virtual void pack_halo(double* out, Space where) = 0;
+  virtual void unpack_halo(const double* in, Space where) = 0;
+  // The memory space the state lives in.
+  virtual Space space() const = 0;
   // max |x_i - x_i at the last mark_positions()| over the free vertices (how far owned
   // vertices moved since the decomposition was rebuilt). The reference is allocated on the
   // first mark, so a run that never marks pays nothing.

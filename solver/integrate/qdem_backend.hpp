@@ -453,24 +453,23 @@ class QdemBackend final : public Backend {
   }
 
   void sync() override { exec_sync(Exec{}); }
+  Space space() const override { return S; }
 
   void set_halo(const std::vector<std::int64_t>& send_index, std::int64_t recv_base,
                 std::int64_t n_recv) override {
     halo_send_.assign(send_index);
     halo_base_ = recv_base;
     halo_nrecv_ = n_recv;
-    const std::int64_t n = std::max<std::int64_t>(send_index.size(), n_recv);
-    if constexpr (S != Space::Host) halo_buf_.resize(6 * n);
   }
 
-  // Records of 6 doubles: x then v of one vertex. On the host the records go straight to
-  // `out`; on a device they are packed there and copied once.
-  void pack_halo(double* out) override {
+  // Records of 6 doubles: x then v of one vertex, packed where the state lives: straight
+  // into `out` when it is in this space, else into halo_buf_ and copied once.
+  void pack_halo(double* out, Space where) override {
     const std::int64_t n = halo_send_.size();
     if (n == 0) return;
     const auto idx = halo_send_.cview();
     const auto x = x_.cview(), v = v_.cview();
-    double* buf = S == Space::Host ? out : halo_buf_.view().p;
+    double* buf = where == S ? out : staging(n);
     for_each(
         Exec{}, n, QDEMSPH_LAMBDA(std::int64_t k) {
           const std::int64_t i = idx[k];
@@ -478,16 +477,17 @@ class QdemBackend final : public Backend {
           r[0] = x.x[i], r[1] = x.y[i], r[2] = x.z[i];
           r[3] = v.x[i], r[4] = v.y[i], r[5] = v.z[i];
         });
-    if constexpr (S != Space::Host) space_copy(out, Space::Host, buf, S, 6 * n * sizeof(double));
+    if (where != S) space_copy(out, where, buf, S, 6 * n * sizeof(double));
   }
 
-  void unpack_halo(const double* in) override {
+  void unpack_halo(const double* in, Space where) override {
     const std::int64_t n = halo_nrecv_, base = halo_base_;
     if (n == 0) return;
     const double* buf = in;
-    if constexpr (S != Space::Host) {
-      space_copy(halo_buf_.view().p, S, in, Space::Host, 6 * n * sizeof(double));
-      buf = halo_buf_.view().p;
+    if (where != S) {
+      double* tmp = staging(n);
+      space_copy(tmp, S, in, where, 6 * n * sizeof(double));
+      buf = tmp;
     }
     const auto x = x_.view(), v = v_.view();
     for_each(
@@ -496,6 +496,12 @@ class QdemBackend final : public Backend {
           x.set(base + k, Vec3{r[0], r[1], r[2]});
           v.set(base + k, Vec3{r[3], r[4], r[5]});
         });
+  }
+
+  // Room for n halo records in this space (grows only).
+  double* staging(std::int64_t n) {
+    if (halo_buf_.size() < 6 * n) halo_buf_.resize(6 * n);
+    return halo_buf_.view().p;
   }
 
   void mark_positions() override {

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -66,8 +68,133 @@ CommEngine::~CommEngine() {
   MPI_Finalized(&finalized);
   if (!finalized && comm_ != MPI_COMM_NULL) {
     if (in_flight_) MPI_Waitall(static_cast<int>(reqs_.size()), reqs_.data(), MPI_STATUSES_IGNORE);
+    if (device_) {
+      for (std::byte* p : peer_) cuda_ipc_close(p);
+      MPI_Barrier(comm_);  // no neighbour maps this rank's buffers when they are freed
+    }
     MPI_Comm_free(&comm_);
   }
+}
+
+bool CommEngine::use_device(bool want, std::size_t max_stride) {
+  if (device_) throw std::logic_error("comm plan: use_device() called twice");
+  const char* env = std::getenv("QDEMSPH_DEVICE_HALO");
+  bool ok = want && !(env && std::strcmp(env, "0") == 0);
+  {  // every neighbour on this node
+    MPI_Comm node;
+    MPI_Comm_split_type(comm_, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &node);
+    MPI_Group all, local;
+    MPI_Comm_group(comm_, &all);
+    MPI_Comm_group(node, &local);
+    for (int r : nbrs_) {
+      int there = MPI_UNDEFINED;
+      MPI_Group_translate_ranks(all, 1, &r, local, &there);
+      if (there == MPI_UNDEFINED) ok = false;
+    }
+    MPI_Group_free(&all);
+    MPI_Group_free(&local);
+    MPI_Comm_free(&node);
+  }
+  auto everyone = [&](bool mine) {
+    int m = mine ? 1 : 0, a = 0;
+    MPI_Allreduce(&m, &a, 1, MPI_INT, MPI_LAND, comm_);
+    return a != 0;
+  };
+  if (!everyone(ok)) return false;
+  // Each sender tells the neighbours it sends to where their records are: its buffer's IPC
+  // handle and the item their block starts at. A failure anywhere (a GPU pair without peer
+  // access) leaves every rank on host staging.
+  struct Where {
+    CudaIpcHandle h;
+    std::int64_t first;
+  };
+  std::vector<Where> out(size_), in(size_);
+  peer_.assign(size_, nullptr);
+  peer_off_.assign(size_, 0);
+  try {
+    dsend_.resize(static_cast<std::int64_t>(std::max<std::size_t>(1, max_stride * n_send())));
+    drecv_.resize(static_cast<std::int64_t>(std::max<std::size_t>(1, max_stride * n_recv())));
+    const CudaIpcHandle h = cuda_ipc_handle(dsend_.view().p);
+    std::vector<MPI_Request> req;
+    for (int r : nbrs_) {
+      if (recv_off_[r + 1] > recv_off_[r]) {
+        req.emplace_back();
+        MPI_Irecv(&in[r], sizeof(Where), MPI_BYTE, r, kTag + 3, comm_, &req.back());
+      }
+      if (send_off_[r + 1] > send_off_[r]) {
+        out[r] = {h, send_off_[r]};
+        req.emplace_back();
+        MPI_Isend(&out[r], sizeof(Where), MPI_BYTE, r, kTag + 3, comm_, &req.back());
+      }
+    }
+    MPI_Waitall(static_cast<int>(req.size()), req.data(), MPI_STATUSES_IGNORE);
+    for (int r : nbrs_)
+      if (recv_off_[r + 1] > recv_off_[r]) {
+        peer_[r] = static_cast<std::byte*>(cuda_ipc_open(in[r].h));
+        peer_off_[r] = in[r].first;
+      }
+  } catch (const std::exception&) {
+    ok = false;
+  }
+  if (!everyone(ok)) {
+    for (std::byte*& p : peer_) cuda_ipc_close(p), p = nullptr;
+    MPI_Barrier(comm_);
+    dsend_ = Buffer<std::byte>(Space::Cuda);
+    drecv_ = Buffer<std::byte>(Space::Cuda);
+    return false;
+  }
+  device_ = true;
+  max_stride_ = max_stride;
+  return true;
+}
+
+void CommEngine::post_device() {
+  cuda_sync();  // the caller's records are in dsend_ before any receiver copies them
+  reqs_.clear();
+  ready_.clear();
+  last_bytes_ = 0;
+  for (int r : nbrs_) {
+    if (recv_off_[r + 1] > recv_off_[r]) {
+      ready_.emplace_back();
+      MPI_Irecv(nullptr, 0, MPI_BYTE, r, kTag + 4, comm_, &ready_.back());
+    }
+    const std::int64_t n = send_off_[r + 1] - send_off_[r];
+    if (n == 0) continue;
+    reqs_.emplace_back();
+    MPI_Isend(nullptr, 0, MPI_BYTE, r, kTag + 4, comm_, &reqs_.back());
+    reqs_.emplace_back();
+    MPI_Irecv(nullptr, 0, MPI_BYTE, r, kTag + 5, comm_, &reqs_.back());  // "copied"
+    last_bytes_ += n * static_cast<std::int64_t>(stride_);
+  }
+  total_bytes_ += last_bytes_;
+  dir_ = Dir::Forward;
+  in_flight_ = true;
+}
+
+std::span<const std::byte> CommEngine::finish_device() {
+  const double t0 = MPI_Wtime();
+  MPI_Waitall(static_cast<int>(ready_.size()), ready_.data(), MPI_STATUSES_IGNORE);
+  std::byte* const recv = drecv_.view().p;
+  for (int r : nbrs_) {
+    const std::int64_t n = recv_off_[r + 1] - recv_off_[r];
+    if (n > 0)
+      space_copy(recv + recv_off_[r] * stride_, Space::Cuda, peer_[r] + peer_off_[r] * stride_,
+                 Space::Cuda, n * stride_);
+  }
+  const std::int64_t nself = send_off_[rank_ + 1] - send_off_[rank_];
+  if (nself > 0)
+    space_copy(recv + recv_off_[rank_] * stride_, Space::Cuda,
+               dsend_.view().p + send_off_[rank_] * stride_, Space::Cuda, nself * stride_);
+  cuda_sync();
+  for (int r : nbrs_)
+    if (recv_off_[r + 1] > recv_off_[r]) {
+      reqs_.emplace_back();
+      MPI_Isend(nullptr, 0, MPI_BYTE, r, kTag + 5, comm_, &reqs_.back());
+    }
+  MPI_Waitall(static_cast<int>(reqs_.size()), reqs_.data(), MPI_STATUSES_IGNORE);
+  in_flight_ = false;
+  seconds_.wait += MPI_Wtime() - t0;
+  return {recv, stride_ * static_cast<std::size_t>(n_recv())};
 }
 
 void CommEngine::begin(std::span<const CommField> src, Dir dir) {
@@ -131,18 +258,29 @@ void CommEngine::post(Dir dir) {
 std::span<std::byte> CommEngine::packed_send_buffer(std::size_t stride) {
   if (in_flight_) throw std::logic_error("comm plan: packing while an exchange is in flight");
   stride_ = stride;
-  sendbuf_.resize(stride_ * send_off_[size_]);
+  const std::size_t n = stride_ * send_off_[size_];
+  if (device_) {
+    if (stride > max_stride_)
+      throw std::logic_error("comm plan: records of " + std::to_string(stride) +
+                             " bytes, the device buffers hold " + std::to_string(max_stride_));
+    return {dsend_.view().p, n};
+  }
+  sendbuf_.resize(n);
   return {sendbuf_.data(), sendbuf_.size()};
 }
 
 void CommEngine::begin_packed() {
   if (in_flight_) throw std::logic_error("comm plan: begin() while an exchange is in flight");
-  post(Dir::Forward);
+  if (device_)
+    post_device();
+  else
+    post(Dir::Forward);
 }
 
 std::span<const std::byte> CommEngine::finish_packed() {
   if (!in_flight_) throw std::logic_error("comm plan: finish() without begin()");
   if (dir_ != Dir::Forward) throw std::logic_error("comm plan: finish() in another direction");
+  if (device_) return finish_device();
   const double t0 = MPI_Wtime();
   MPI_Waitall(static_cast<int>(reqs_.size()), reqs_.data(), MPI_STATUSES_IGNORE);
   in_flight_ = false;

@@ -139,9 +139,15 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     load_state(s);
   }
 
+  // The first distribution (every item from its start slice to its owner; after a restart,
+  // from the file's shares) is set-up: its balance and migration seconds are reported apart
+  // (parallel.setup_s), not in the stepping loop's phases.
   void adopt(const StateSlice& s) override {
     if (!g_) throw std::logic_error("DistributedBackend::adopt before upload");
+    const double b0 = seconds("balance"), m0 = seconds("migration");
     redistribute(s, true, true);
+    setup_balance_s_ += seconds("balance") - b0;
+    setup_migration_s_ += seconds("migration") - m0;
   }
 
   // ---- stages ------------------------------------------------------------------------------
@@ -162,7 +168,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       auto s = timers_.scope("halo");
       auto s1 = timers_.scope("halo.xv");
       auto buf = e.packed_send_buffer(6 * sizeof(double));
-      local_->pack_halo(reinterpret_cast<double*>(buf.data()));
+      local_->pack_halo(reinterpret_cast<double*>(buf.data()), e.packed_space());
       e.begin_packed();
     }
     {
@@ -173,7 +179,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       auto s = timers_.scope("halo");
       auto s1 = timers_.scope("halo.xv");
       const auto in = e.finish_packed();
-      local_->unpack_halo(reinterpret_cast<const double*>(in.data()));
+      local_->unpack_halo(reinterpret_cast<const double*>(in.data()), e.packed_space());
       halo_bytes_ += e.last_bytes();
     }
     std::vector<ContactShare> out;
@@ -385,8 +391,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   void set_halo(const std::vector<std::int64_t>&, std::int64_t, std::int64_t) override {
     unsupported("set_halo");
   }
-  void pack_halo(double*) override { unsupported("pack_halo"); }
-  void unpack_halo(const double*) override { unsupported("unpack_halo"); }
+  void pack_halo(double*, Space) override { unsupported("pack_halo"); }
+  void unpack_halo(const double*, Space) override { unsupported("unpack_halo"); }
+  Space space() const override { return local_->space(); }
   void mark_positions() override { unsupported("mark_positions"); }
   double max_moved() override { unsupported("max_moved"); }
 
@@ -516,24 +523,30 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     };
     const double contact = local_contact_seconds();
     // The fluid's ghost refreshes and layout rebuilds count as halo and migration, like the
-    // bodies' (sph_stage.hpp: sub-phases sph.halo, sph.rebuild of the run's "sph").
-    const double fh = sec(run_phases, "sph.halo"), fr = sec(run_phases, "sph.rebuild");
+    // bodies', and its first layout as set-up (sph_stage.hpp: sub-phases sph.halo,
+    // sph.rebuild, sph.setup of the run's "sph"). Balance and migration are those of the
+    // stepping loop: the first distribution is set-up (adopt).
+    const double fh = sec(run_phases, "sph.halo"), fr = sec(run_phases, "sph.rebuild"),
+                 fs = sec(run_phases, "sph.setup");
     double p[8] = {sec(t, "elements") - contact,
                    sec(t, "integration"),
                    contact,
-                   sec(run_phases, "sph") - fh - fr,
+                   sec(run_phases, "sph") - fh - fr - fs,
                    sec(t, "halo") + fh,
-                   sec(t, "migration") + fr,
-                   sec(t, "balance"),
+                   sec(t, "migration") - setup_migration_s_ + fr,
+                   sec(t, "balance") - setup_balance_s_,
                    sec(run_phases, "output")};
-    double mx[8], sum[8];
-    MPI_Allreduce(p, mx, 8, MPI_DOUBLE, MPI_MAX, comm_);
+    double mx[9], sum[8];
+    std::copy(p, p + 8, mx);
+    mx[8] = setup_balance_s_ + setup_migration_s_ + fs;
+    MPI_Allreduce(MPI_IN_PLACE, mx, 9, MPI_DOUBLE, MPI_MAX, comm_);
     std::copy(p, p + 8, sum);
     allreduce_sum_same(comm_, sum, 8);
     for (int k = 0; k < 8; ++k) {
       r.phases_max[kParallelPhases[k]] = mx[k];
       r.phases_mean[kParallelPhases[k]] = sum[k] / np_;
     }
+    r.setup_s = mx[8];
     r.owned_vertices = allgatherv(comm_, std::vector<std::int64_t>{L_.n_owned});
     r.owned_tets = allgatherv(comm_, std::vector<std::int64_t>{L_.n_home});
     double b[3] = {static_cast<double>(migrated_bytes_), static_cast<double>(halo_bytes_),
@@ -730,10 +743,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     auto s = timers_.scope("halo");
     CommEngine& e = halo_->engine();
     auto buf = e.packed_send_buffer(6 * sizeof(double));
-    local_->pack_halo(reinterpret_cast<double*>(buf.data()));
+    local_->pack_halo(reinterpret_cast<double*>(buf.data()), e.packed_space());
     e.begin_packed();
     const auto in = e.finish_packed();
-    local_->unpack_halo(reinterpret_cast<const double*>(in.data()));
+    local_->unpack_halo(reinterpret_cast<const double*>(in.data()), e.packed_space());
   }
 
   // Fixed bodies do not deform: rank 0 computes their stress once (it is the round-off of
@@ -787,6 +800,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       log_.push_back({steps_, last_imbalance_, predicted_after_, migrated_bytes_ - before});
       pending_after_ = true;
     }
+  }
+
+  double seconds(const char* phase) const {
+    const auto it = timers_.seconds().find(phase);
+    return it == timers_.seconds().end() ? 0.0 : it->second;
   }
 
   // Busy time of each rank since the last window: the imbalance, and the time per item that
@@ -1139,6 +1157,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       }
     }
     local_->load_state(st);
+    halo_->engine().use_device(local_->space() == Space::Cuda, 6 * sizeof(double));
     local_->set_halo(halo_->engine().send_index(), L.n_owned, halo_->n_ghost());
     local_->mark_positions();
     L_ = std::move(L);
@@ -1202,6 +1221,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   std::vector<double> fixed_vm_;
   // Records.
   PhaseTimers timers_;
+  double setup_balance_s_ = 0, setup_migration_s_ = 0;  // of the first distribution (adopt)
   std::map<std::string, double> contact_acc_;
   double overlap_acc_ = 0, rebuilds_acc_ = 0;
   Weights w_;

@@ -14,6 +14,7 @@ std::unique_ptr<DistributedBackend> make_distributed_backend(MPI_Comm comm,
                                                              std::unique_ptr<Backend> local,
                                                              const ParallelOptions& options);
 std::unique_ptr<FluidExchange> make_fluid_exchange(MPI_Comm comm, const ParallelOptions& options,
-                                                   const FluidSetup& fluid);
+                                                   const FluidSetup& fluid,
+                                                   Space space = Space::Host);
 
 }  // namespace qdemsph

@@ -27,8 +27,9 @@ void resize(FluidParticles& p, std::int64_t n) {
 
 class MpiFluidExchange final : public FluidExchange {
  public:
-  MpiFluidExchange(MPI_Comm comm, const ParallelOptions& o, const FluidSetup& f)
-      : curve_(parse_curve(o.curve)),
+  MpiFluidExchange(MPI_Comm comm, const ParallelOptions& o, const FluidSetup& f, Space space)
+      : space_(space),
+        curve_(parse_curve(o.curve)),
         every_(o.rebalance_every),
         threshold_(o.rebalance_threshold),
         max_cell_(o.max_cell_cost),
@@ -105,6 +106,7 @@ class MpiFluidExchange final : public FluidExchange {
     }
     halo_.reset();
     halo_ = std::make_unique<HaloPlan>(comm_, nown, off, ranks, o.gid);
+    halo_->engine().use_device(space_ == Space::Cuda, 6 * sizeof(double));
     resize(o, halo_->n_total());
     const auto f = fields_of(o);
     halo_->gather_begin(f);
@@ -134,6 +136,7 @@ class MpiFluidExchange final : public FluidExchange {
   std::span<std::byte> send_buffer(std::size_t stride) override {
     return halo_->engine().packed_send_buffer(stride);
   }
+  Space buffer_space() const override { return halo_->engine().packed_space(); }
   std::span<const std::byte> refresh() override {
     halo_->engine().begin_packed();
     const auto in = halo_->engine().finish_packed();
@@ -223,6 +226,7 @@ class MpiFluidExchange final : public FluidExchange {
     return mean > 0 && most / mean - 1 > threshold_;
   }
 
+  Space space_;  // where the stage's arrays live (a GPU stage's ghosts may stay on the device)
   MPI_Comm comm_ = MPI_COMM_NULL;
   int me_ = 0, np_ = 1;
   Curve curve_;
@@ -244,13 +248,13 @@ class MpiFluidExchange final : public FluidExchange {
 }  // namespace
 
 std::unique_ptr<FluidExchange> make_fluid_exchange(MPI_Comm comm, const ParallelOptions& options,
-                                                   const FluidSetup& fluid) {
-  return std::make_unique<MpiFluidExchange>(comm, options, fluid);
+                                                   const FluidSetup& fluid, Space space) {
+  return std::make_unique<MpiFluidExchange>(comm, options, fluid, space);
 }
 
 std::unique_ptr<FluidExchange> make_fluid_exchange(const ParallelOptions& options,
-                                                   const FluidSetup& fluid) {
-  return make_fluid_exchange(MPI_COMM_WORLD, options, fluid);
+                                                   const FluidSetup& fluid, Space space) {
+  return make_fluid_exchange(MPI_COMM_WORLD, options, fluid, space);
 }
 
 }  // namespace qdemsph

@@ -34,9 +34,10 @@ inline constexpr double kFluidWallCost = 0.25;
 // the 3,280-particle test dam break (test_distributed_fluid.cpp) rebuilds after 37-133 steps.
 inline constexpr double kFluidSkin = 0.25;
 
-// For the stage of `fluid`: the ghost band is its kernel support 2h x (1 + kFluidSkin) wide,
-// and wraps its periodic z (fluid.periodic_z).
+// For the stage of `fluid`, whose arrays live in `space`: the ghost band is its kernel
+// support 2h x (1 + kFluidSkin) wide, and wraps its periodic z (fluid.periodic_z).
 std::unique_ptr<FluidExchange> make_fluid_exchange(const ParallelOptions& options,
-                                                   const FluidSetup& fluid);
+                                                   const FluidSetup& fluid,
+                                                   Space space = Space::Host);
 
 }  // namespace qdemsph

@@ -22,6 +22,7 @@ Json ParallelRecord::to_json() const {
   j["fluid_halo_bytes_per_step"] = fluid_halo_bytes_per_step;
   j["fluid_migrated_bytes"] = fluid_migrated_bytes;
   j["fluid_rebuilds"] = fluid_rebuilds;
+  j["setup_s"] = setup_s;
   Json ov = Json::array(), ot = Json::array();
   for (auto n : owned_vertices) ov.push_back(n);
   for (auto n : owned_tets) ot.push_back(n);

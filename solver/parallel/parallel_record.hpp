@@ -15,7 +15,13 @@
 //                        the allgathered border band cells (bytes x (ranks - 1))
 //   fluid_rebuilds       the fluid's layout rebuilds (distribute() calls), the first included
 //   owned_vertices, owned_tets   per rank: owned free vertices, home free tets (at the end)
-//   phases_max, phases_mean      per phase, seconds over ranks (kParallelPhases)
+//   phases_max, phases_mean      per phase, seconds over ranks (kParallelPhases), of the
+//                        stepping loop: migration and balance count the rebalances and rebuilds
+//                        during the run (the fluid's layout rebuilds too), not the first
+//                        distribution
+//   setup_s              the first distribution (the largest over ranks): every item moved from
+//                        its start slice (or a checkpoint's share) to its owner, the fluid's
+//                        first layout
 //   rebalance_log        [{step, imbalance_before, imbalance_after, bytes}]; imbalance_after
 //                        is measured over the next window (or the rest of the run)
 #pragma once
@@ -50,6 +56,7 @@ struct ParallelRecord {
   double fluid_halo_bytes_per_step = 0;
   std::int64_t fluid_migrated_bytes = 0;
   std::int64_t fluid_rebuilds = 0;
+  double setup_s = 0;
   std::vector<std::int64_t> owned_vertices, owned_tets;
   std::map<std::string, double> phases_max, phases_mean;
   std::vector<RebalanceEntry> rebalance_log;

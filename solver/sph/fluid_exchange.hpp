@@ -25,6 +25,7 @@
 #include <span>
 #include <vector>
 
+#include "core/memory.hpp"
 #include "core/vec.hpp"
 
 namespace qdemsph {
@@ -70,11 +71,14 @@ class FluidExchange {
   // Owned values -> ghost slots of the layout distribute() returned, in records the caller
   // packs where its arrays live (a GPU stage on the device): fill send_buffer(stride) with
   // one record of `stride` bytes per entry of send_slots() (owned layout slots; they stand
-  // until the next distribute()), then refresh() returns the records received in host
-  // memory, the k-th for the ghost in layout slot n_owned + k. Collective.
+  // until the next distribute()), then refresh() returns the records received, the k-th for
+  // the ghost in layout slot n_owned + k. Both buffers are in buffer_space(): host memory, or
+  // a GPU stage's device memory when the ranks' GPUs share a node (records of at most 6
+  // doubles; parallel/comm_plan.hpp, CommEngine::use_device). Collective.
   virtual const std::vector<std::int64_t>& send_slots() const = 0;
   virtual std::span<std::byte> send_buffer(std::size_t stride) = 0;
   virtual std::span<const std::byte> refresh() = 0;
+  virtual Space buffer_space() const = 0;
   // Reductions over the ranks, the same result on every rank. Collective.
   virtual void sum(std::span<double> v) = 0;
   virtual void max(std::span<double> v) = 0;

@@ -170,7 +170,7 @@ class SphStage final : public FluidStage {
       if (keep) {
         refresh_positions();
       } else {
-        auto s = timers_.scope("sph.rebuild");
+        auto s = timers_.scope(laid_out_ ? "sph.rebuild" : "sph.setup");
         redistribute();
       }
     }
@@ -605,8 +605,11 @@ class SphStage final : public FluidStage {
     const auto at = inv_.cview();
     const auto send = send_.cview();
     const std::span<std::byte> out = ex_->send_buffer(w * sizeof(double));
+    // Records where the exchange keeps them (a device-resident exchange: this stage's device),
+    // or packed here and copied once.
+    const Space where = ex_->buffer_space();
     double* pk = reinterpret_cast<double*>(out.data());
-    if constexpr (S != Space::Host) {
+    if (where != S) {
       if (pack_.size() < w * std::max(ns, ng)) pack_.resize(w * std::max(ns, ng));
       pk = pack_.view().p;
     }
@@ -615,15 +618,15 @@ class SphStage final : public FluidStage {
           const std::int64_t i = at[send[k]];
           for (int c = 0; c < w; ++c) pk[w * k + c] = f.c[c][i];
         });
-    if constexpr (S != Space::Host) space_copy(out.data(), Space::Host, pk, S, out.size());
+    if (where != S) space_copy(out.data(), where, pk, S, out.size());
     std::span<const std::byte> in;
     {
       auto s1 = timers_.scope("sph.halo.mpi");
       in = ex_->refresh();
     }
     const double* rv = reinterpret_cast<const double*>(in.data());
-    if constexpr (S != Space::Host) {
-      space_copy(pack_.view().p, S, in.data(), Space::Host, in.size());
+    if (where != S) {
+      space_copy(pack_.view().p, S, in.data(), where, in.size());
       rv = pack_.view().p;
     }
     for_each(
@@ -720,7 +723,8 @@ class SphStage final : public FluidStage {
   // Distributed: the layout's upkeep inside compute(), device work included: "sph.halo" (the
   // skin test and the ghost refreshes; of it "sph.halo.skin" the test, "sph.halo.mpi" the
   // messages of the refreshes, without packing and copies), "sph.rebuild" (redistribute():
-  // migration and the new ghost layout); each scope starts after a synchronisation, so the
+  // migration and the new ghost layout), "sph.setup" (the first layout, and the one after a
+  // load_state); each scope starts after a synchronisation, so the
   // passes' device work is not counted in it. One rank times nothing here (no
   // synchronisation added).
   PhaseTimers timers_{[] { exec_sync(Exec{}); }};

@@ -13,8 +13,10 @@
 #include <map>
 #include <memory>
 #include <random>
+#include <cstring>
 #include <set>
 
+#include "core/memory.hpp"
 #include "parallel/cell_tree.hpp"
 #include "parallel/comm_plan.hpp"
 #include "parallel/partition.hpp"
@@ -341,6 +343,57 @@ TEST(HaloPlan, BeginFinishWithInterleavedWork) {
   if (p > 1) {
     EXPECT_GT(h.engine().total_bytes(), 0);
   }
+}
+
+// The device-resident packed exchange (CUDA IPC between the GPU ranks of a node) delivers the
+// records of the host-staged one, exchange after exchange; without a GPU use_device() declines
+// and the records stay in host memory. Needs a GPU for the device part (the GPU session runs
+// this binary: ci/gpu/pack.sh with PACK_MPI=1).
+TEST(HaloPlan, DeviceResidentPackedExchangeEqualsHostStaged) {
+  HaloSetup s = halo_setup();
+  CommEngine& e = s.plan->engine();
+  const int me = rank_of();
+  const std::int64_t ns = e.n_send(), nr = e.n_recv();
+  auto records = [&](int round) {  // two doubles per send slot
+    std::vector<double> r(2 * ns);
+    for (std::int64_t k = 0; k < ns; ++k) {
+      const std::uint64_t id = s.it.gid[e.send_index()[k]];
+      r[2 * k] = payload(id) + round;
+      r[2 * k + 1] = -static_cast<double>(id) * (round + 1);
+    }
+    return r;
+  };
+  const std::size_t stride = 2 * sizeof(double);
+  std::vector<std::vector<double>> staged;
+  for (int round = 0; round < 3; ++round) {
+    const std::vector<double> r = records(round);
+    auto buf = e.packed_send_buffer(stride);
+    std::memcpy(buf.data(), r.data(), buf.size());
+    e.begin_packed();
+    const auto in = e.finish_packed();
+    staged.emplace_back(nr * 2);
+    std::memcpy(staged.back().data(), in.data(), in.size());
+  }
+  const bool gpu = cuda_available();
+  EXPECT_FALSE(e.use_device(false, stride));
+  EXPECT_EQ(e.packed_space(), Space::Host);
+  if (!gpu) GTEST_SKIP() << "no GPU: the device-resident exchange is checked on GPU machines";
+  const bool on = e.use_device(true, stride);
+  EXPECT_EQ(e.packed_space(), on ? Space::Cuda : Space::Host);
+  if (!on) GTEST_SKIP() << "use_device declined (QDEMSPH_DEVICE_HALO=0 or ranks on several nodes)";
+  std::int64_t bad = 0;
+  for (int round = 0; round < 3; ++round) {
+    const std::vector<double> r = records(round);
+    auto buf = e.packed_send_buffer(stride);
+    space_copy(buf.data(), Space::Cuda, r.data(), Space::Host, buf.size());
+    e.begin_packed();
+    const auto in = e.finish_packed();
+    std::vector<double> got(nr * 2);
+    space_copy(got.data(), Space::Host, in.data(), Space::Cuda, in.size());
+    bad += got != staged[round];
+  }
+  EXPECT_EQ(bad, 0) << "rank " << me;
+  EXPECT_THROW(e.packed_send_buffer(3 * stride), std::logic_error);  // larger than max_stride
 }
 
 namespace {
