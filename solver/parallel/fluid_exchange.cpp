@@ -48,7 +48,9 @@ class MpiFluidExchange final : public FluidExchange {
 
   std::int64_t distribute(FluidParticles& p) override {
     if (!after_keep_) ++evaluations_;  // else keep() counted this evaluation
+    rebuilt_ = after_keep_;
     after_keep_ = false;
+    const double t0 = MPI_Wtime();
     ++rebuilds_;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
     std::vector<double> cost = p.cost;
@@ -113,12 +115,15 @@ class MpiFluidExchange final : public FluidExchange {
     halo_->gather_finish(f);
     halo_bytes_ += halo_->engine().last_bytes();
     p = std::move(o);
+    // This part of the rebuild, until the stage's part is measured too (time_step).
+    rebuild_s_ = std::max(rebuild_s_, MPI_Wtime() - t0);
     return nown;
   }
 
   bool keep(double moved, double load) override {
     ++steps_;
     ++evaluations_;
+    time_step();
     if (rebalance_due(load)) {
       rebalance_ = true;
     } else {
@@ -216,14 +221,35 @@ class MpiFluidExchange final : public FluidExchange {
   }
 
   // Every rebalance_every steps: the owned cost's max / mean - 1 over the ranks against the
-  // threshold (the same decision on every rank).
+  // threshold, and whether a new cut pays for its layout rebuild (recut_pays; a threshold of
+  // 0 re-cuts at every measurement). The same decision on every rank.
   bool rebalance_due(double load) {
     if (every_ <= 0 || steps_ % every_ != 0) return false;
-    double total = load, most = load;
+    double total = load;
     allreduce_sum_same(comm_, &total, 1);
-    MPI_Allreduce(MPI_IN_PLACE, &most, 1, MPI_DOUBLE, MPI_MAX, comm_);
+    double most[3] = {load, window_n_ > 0 ? window_s_ / window_n_ : 0.0, rebuild_s_};
+    MPI_Allreduce(MPI_IN_PLACE, most, 3, MPI_DOUBLE, MPI_MAX, comm_);
+    window_s_ = 0, window_n_ = 0;
     const double mean = total / np_;
-    return mean > 0 && most / mean - 1 > threshold_;
+    if (!(mean > 0 && most[0] / mean - 1 > threshold_)) return false;
+    return threshold_ == 0 || recut_pays(1 - mean / most[0], most[1], every_, most[2]);
+  }
+
+  // The wall time between keep() calls: a step's (window_s_ / window_n_), or, for the interval
+  // that holds a layout rebuild a keep() asked for, the rebuild's (less a step).
+  void time_step() {
+    const double now = MPI_Wtime();
+    if (last_keep_ > 0) {
+      const double dt = now - last_keep_;
+      if (rebuilt_) {
+        rebuild_s_ = std::max(rebuild_s_, dt - (window_n_ > 0 ? window_s_ / window_n_ : 0.0));
+      } else {
+        window_s_ += dt;
+        ++window_n_;
+      }
+    }
+    rebuilt_ = false;
+    last_keep_ = now;
   }
 
   Space space_;  // where the stage's arrays live (a GPU stage's ghosts may stay on the device)
@@ -236,6 +262,11 @@ class MpiFluidExchange final : public FluidExchange {
   BandGrid band_;           // band cells: half of support + skin wide, wrapping a periodic z
   long steps_ = 0;          // keep() calls
   bool rebalance_ = false;  // the next distribute() cuts the partition again
+  // Wall times the re-cut decision weighs (time_step): steps since the last measurement, and
+  // the longest layout rebuild so far (the exchange's part, then the whole interval).
+  double last_keep_ = 0, window_s_ = 0, rebuild_s_ = 0;
+  long window_n_ = 0;
+  bool rebuilt_ = false;  // a keep()-asked distribute() ran since the last keep()
   // Traffic (this rank's bytes sent): evaluations counts keep() calls and the distribute()
   // calls no keep() asked for (the first, and the one after a load_state).
   bool after_keep_ = false;  // the next distribute() is the one a keep() asked for
