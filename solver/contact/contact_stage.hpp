@@ -73,6 +73,16 @@ struct Evaluator {
   QDEMSPH_HD bool ghost(int i) const { return !all && i >= nfv && free(i); }
   QDEMSPH_HD bool owns(int type, const std::int32_t* v) const {
     if (all) return true;
+    // Owned vertices (index < nfv) are free: when every vertex is owned so is the anchor, when
+    // none is the anchor is not. Only a record across the border reads bodies and global ids
+    // (for a narrow-phase edge pair, dependent loads a GPU thread waits for).
+    int owned = 0, used = 0;
+    for (int k = 0; k < 4; ++k) {
+      used += v[k] >= 0;
+      owned += v[k] >= 0 && v[k] < nfv;
+    }
+    if (owned == 0) return false;
+    if (owned == used) return true;
     const int k = anchor_slot(type, v, *this);
     return k >= 0 && v[k] < nfv;
   }
