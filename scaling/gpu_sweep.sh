@@ -4,7 +4,8 @@
 # two-H200 host) and on 1 vs 2 GPUs (one rank per GPU), the load balancer against a static
 # partition (sliding block), interconnect probes, then a table. Records go to OUTDIR (flat):
 #   records/*.json  one per run (scaling/run.py)     machine.json  GPUs, CPU, topology
-#   probes.json     MPI ping-pong, host<->device copies (the model's network parameters)
+#   probes.json     MPI ping-pong, host<->device copies, two GPUs' device-memory exchange
+#                   (CUDA-aware MPI or not; CUDA IPC peer copies): the model's network parameters
 #   sweep.log       everything printed               report.md     tables (scaling/report.py)
 #
 #   scaling/gpu_sweep.sh OUTDIR [PACK]
@@ -107,7 +108,7 @@ if [ "$DIST" = 1 ]; then
 fi
 
 if want probes && [ "$(left)" -gt 30 ]; then
-  step "probes: MPI ping-pong (2 ranks, host memory), host<->device copies"
+  step "probes: MPI ping-pong (2 ranks, host memory), host<->device copies, device-memory exchange (2 GPUs)"
   {
     echo "["
     if command -v mpicc >/dev/null && mpicc -O2 -o "$WORK/pingpong" scaling/probes/pingpong.c 2>/dev/null; then
@@ -120,6 +121,13 @@ if want probes && [ "$(left)" -gt 30 ]; then
       timeout 60 "$WORK/copybw" || echo '{"probe": "cuda_copy", "error": "failed"}'
     else
       echo '{"probe": "cuda_copy", "error": "no GPU or nvcc"}'
+    fi
+    echo ","
+    if [ "$NGPU" -ge 2 ] && nvcc -O2 $(mpicc --showme:compile) -o "$WORK/devicecomm" scaling/probes/devicecomm.cu \
+        $(mpicc --showme:link) 2>/dev/null; then
+      timeout 90 mpirun $ROOTARG -np 2 "$WORK/devicecomm" || echo '{"probe": "device_comm", "error": "failed"}'
+    else
+      echo '{"probe": "device_comm", "error": "fewer than 2 GPUs, or no nvcc / mpicc"}'
     fi
     echo "]"
   } > "$OUT/probes.json"

@@ -703,8 +703,8 @@ class ContactStage {
           });
     }
     const ContactTopology topo = topology();
-    const std::int64_t np = npf_, nwv = nwv_, nw = nw_;  // pairs start at free primitives
-    const auto ps = pairs_.start();
+    const std::int64_t npair = pairs_.size(), nwv = nwv_, nw = nw_;
+    const auto fst = pairs_.first();
     const auto sec = pairs_.second();
     const auto pto = prim_tri_off_.cview();
     const auto pt = prim_tri_.cview();
@@ -713,26 +713,25 @@ class ContactStage {
     const auto vb = vertex_body_.cview();
     const auto vg = vgid_.cview();
     const double d_dem = d_dem_;
-    // One pass over the candidate pairs and the wall vertices appends every contact through
-    // one atomic counter; the order of the appends does not matter, the records are sorted
-    // by their keys (unique per feature pair) next. Should the buffer be too small, the pass
-    // runs again with room for all (the count is exact: every contact was counted).
+    // One pass over the candidate pairs (a thread per pair: primitives' pair counts are uneven)
+    // and the wall vertices appends every contact through one atomic counter; the order of the
+    // appends does not matter, the records are sorted by their keys (unique per feature pair)
+    // next. Should the buffer be too small, the pass runs again with room for all (the count
+    // is exact: every contact was counted).
     std::int64_t nc = 0;
     for (int pass = 0; pass < 2; ++pass) {
       count_.zero();
       const AppendRecord app{rec_.view().p, count_.view().p, rec_.size()};
       for_each(
-          Exec{}, np + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
-            if (i < np) {
-              for (std::int64_t q = ps[i]; q < ps[i + 1]; ++q) {
-                const int j = sec[q];
-                for (std::int64_t ta = pto[i]; ta < pto[i + 1]; ++ta)
-                  for (std::int64_t tb = pto[j]; tb < pto[j + 1]; ++tb)
-                    topo.narrow_tris(x, pt[ta], pt[tb], app);
-              }
+          Exec{}, npair + nwv, QDEMSPH_LAMBDA(std::int64_t i) {
+            if (i < npair) {
+              const int a = fst[i], b = sec[i];
+              for (std::int64_t ta = pto[a]; ta < pto[a + 1]; ++ta)
+                for (std::int64_t tb = pto[b]; tb < pto[b + 1]; ++tb)
+                  topo.narrow_tris(x, pt[ta], pt[tb], app);
               return;
             }
-            const int A = wv[i - np];
+            const int A = wv[i - npair];
             const Vec3 xa = x[A];
             for (std::int64_t w = 0; w < nw; ++w) {
               const Vec3 p{wall[8 * w], wall[8 * w + 1], wall[8 * w + 2]};

@@ -6,8 +6,10 @@
 // bodies). With cell width L >= 2 max r + gap (report eq. 9-10: L_cell >= D_max + D_DEM,
 // D_max = 2 max_j |x_j - centroid|) every such pair lies in adjacent cells, so only the 27
 // neighbouring cells are searched. Output: start[i] .. start[i + 1] index `second`, the
-// partners j > i of item i, in a fixed order (cells by key, items by index): deterministic.
-// Cost: count and fill each read 4 doubles per visited item.
+// partners j > i of item i, in a fixed order (cells by key, items by index): deterministic;
+// first[q] = i for each pair q of item i, so that a loop may run one thread per pair (the
+// contact narrow phase: items' pair counts are uneven, a thread per item idles most of a GPU
+// warp). Cost: count and fill each read 4 doubles per visited item.
 #pragma once
 
 #include <cstdint>
@@ -57,9 +59,14 @@ class CandidatePairs {
         Exec{}, n, QDEMSPH_LAMBDA(std::int64_t i) { start[i] = visit(i, nullptr); });
     const std::int64_t total = exclusive_scan(Exec{}, start, n);
     if (second_.size() < total) second_.resize(total + total / 4 + 16);
+    if (first_.size() < total) first_.resize(total + total / 4 + 16);
     const auto second = second_.view();
+    const auto first = first_.view();
     for_each(
-        Exec{}, n, QDEMSPH_LAMBDA(std::int64_t i) { visit(i, second.p + start[i]); });
+        Exec{}, n, QDEMSPH_LAMBDA(std::int64_t i) {
+          visit(i, second.p + start[i]);
+          for (std::int64_t q = start[i]; q < start[i + 1]; ++q) first[q] = static_cast<int>(i);
+        });
     n_ = n;
     total_ = total;
     return total;
@@ -67,13 +74,14 @@ class CandidatePairs {
 
   View<const std::int64_t> start() const { return {start_.cview().p, n_ + 1}; }
   View<const int> second() const { return {second_.cview().p, total_}; }
+  View<const int> first() const { return {first_.cview().p, total_}; }
   std::int64_t size() const { return total_; }
-  std::size_t bytes() const { return start_.bytes() + second_.bytes(); }
+  std::size_t bytes() const { return start_.bytes() + second_.bytes() + first_.bytes(); }
 
  private:
   std::int64_t n_ = 0, total_ = 0;
   Buffer<std::int64_t> start_{S};
-  Buffer<int> second_{S};
+  Buffer<int> second_{S}, first_{S};
 };
 
 }  // namespace qdemsph
