@@ -26,6 +26,14 @@ struct BandCell {
   std::int64_t i[3];
 };
 
+// The cell of a key (band_key's inverse for unclamped coordinates).
+inline BandCell band_cell_of_key(std::uint64_t key) {
+  constexpr std::int64_t off = std::int64_t{1} << 20;
+  return {{static_cast<std::int64_t>(key >> 42) - off,
+           static_cast<std::int64_t>((key >> 21) & 0x1fffff) - off,
+           static_cast<std::int64_t>(key & 0x1fffff) - off}};
+}
+
 inline BandCell band_cell(Vec3 p, double band) {
   // Clamped before the conversion (a blown-up run's NaN or huge values stay defined; the
   // run-time checks report them).

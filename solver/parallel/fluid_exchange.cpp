@@ -1,14 +1,15 @@
 #include "parallel/fluid_exchange.hpp"
 
 #include <algorithm>
-#include <unordered_map>
 #include <utility>
 
+#include "core/exec_host.hpp"
 #include "parallel/balance.hpp"
 #include "parallel/band_cells.hpp"
 #include "parallel/collectives.hpp"
 #include "parallel/comm_plan.hpp"
 #include "parallel/distributed_backend_mpi.hpp"
+#include "parallel/key_index.hpp"
 #include "sph/fluid_setup.hpp"
 
 namespace qdemsph {
@@ -61,60 +62,27 @@ class MpiFluidExchange final : public FluidExchange {
     if (dec_.splitters.empty() || rebalance_) dec_ = balance(comm_, p.x, cost, curve_, max_cell_);
     rebalance_ = false;
 
-    // Owned particles to the owners of their positions.
-    std::vector<int> dest(n);
-    for (std::int64_t i = 0; i < n; ++i) dest[i] = dec_.owner(p.x[i]);
-    MigratePlan mp(comm_, dest, p.gid);
-    FluidParticles o;
-    resize(o, mp.n_new());
+    // Owned particles to the owners of their positions, into o_ (its storage reused).
+    dest_.resize(n);
+    for_each(HostExec{}, n, [&](std::int64_t i) { dest_[i] = dec_.owner(p.x[i]); });
+    MigratePlan mp(comm_, dest_, p.gid);
+    resize(o_, mp.n_new());
     mp.begin(fields_of(p));
-    mp.finish(fields_of(o));
+    mp.finish(fields_of(o_));
     migrated_bytes_ += mp.engine().last_bytes();
     const std::int64_t nown = mp.n_new();
 
-    // Ghosts: the band cells of this rank's owned particles, published to all; a particle
-    // goes to every other rank with an owned particle in the 5^3 cells around its own. A cell
-    // whose 5^3 cells lie inside this rank's piece has no other rank's particle around it, so
-    // only the others (near the piece's border) are published.
-    std::vector<std::uint64_t> mine(nown);
-    for (std::int64_t i = 0; i < nown; ++i) mine[i] = cell_key(o.x[i]);
-    std::sort(mine.begin(), mine.end());
-    mine.erase(std::unique(mine.begin(), mine.end()), mine.end());
-    std::vector<std::pair<std::uint64_t, std::int64_t>> pub;
-    for (auto c : mine)
-      if (!interior(c)) pub.push_back({c, me_});
-    std::unordered_map<std::uint64_t, std::vector<int>> occupied;  // cell -> other ranks
-    for (const auto& [c, r] : allgatherv(comm_, pub, &band_bytes_))
-      if (r != me_) occupied[c].push_back(static_cast<int>(r));
-    std::unordered_map<std::uint64_t, std::vector<int>> near;  // cell -> ranks within the band
-    std::vector<std::int64_t> off{0};
-    std::vector<int> ranks;
-    for (std::int64_t i = 0; i < nown; ++i) {
-      const BandCell c = band_.cell(o.x[i]);
-      const std::uint64_t key = band_key(c.i[0], c.i[1], c.i[2]);
-      auto it = near.find(key);
-      if (it == near.end()) {
-        std::vector<int> r;
-        band_.for_each_neighbour(c, [&](std::uint64_t k) {
-          const auto q = occupied.find(k);
-          if (q != occupied.end()) r.insert(r.end(), q->second.begin(), q->second.end());
-        });
-        std::sort(r.begin(), r.end());
-        r.erase(std::unique(r.begin(), r.end()), r.end());
-        it = near.emplace(key, std::move(r)).first;
-      }
-      ranks.insert(ranks.end(), it->second.begin(), it->second.end());
-      off.push_back(static_cast<std::int64_t>(ranks.size()));
-    }
+    find_ghost_ranks(nown);
     halo_.reset();
-    halo_ = std::make_unique<HaloPlan>(comm_, nown, off, ranks, o.gid);
+    halo_ = std::make_unique<HaloPlan>(comm_, nown, g_.off, g_.ranks, o_.gid);
     halo_->engine().use_device(space_ == Space::Cuda, 6 * sizeof(double));
-    resize(o, halo_->n_total());
-    const auto f = fields_of(o);
+    resize(o_, halo_->n_total());
+    const auto f = fields_of(o_);
     halo_->gather_begin(f);
     halo_->gather_finish(f);
     halo_bytes_ += halo_->engine().last_bytes();
-    p = std::move(o);
+    o_.cost.clear();
+    std::swap(p, o_);  // o_ keeps the caller's storage for the next distribute()
     // This part of the rebuild, until the stage's part is measured too (time_step).
     rebuild_s_ = std::max(rebuild_s_, MPI_Wtime() - t0);
     return nown;
@@ -177,19 +145,85 @@ class MpiFluidExchange final : public FluidExchange {
     return band_key(c.i[0], c.i[1], c.i[2]);
   }
 
+  // The ranks that get a ghost copy of each of the nown owned particles of o_ (g_.off,
+  // g_.ranks: HaloPlan's lists): the band cells of this rank's owned particles are published
+  // to all, and a particle goes to every other rank with an owned particle in the 5^3 cells
+  // around its own. A cell whose 5^3 cells lie inside this rank's piece (interior) has no
+  // other rank's particle around it: only the others, near the piece's border, are published
+  // and looked up.
+  void find_ghost_ranks(std::int64_t nown) {
+    GhostScratch& g = g_;
+    // The distinct band cells (in the order of their first particle) and each particle's.
+    g.cells.clear();
+    g.cell_key.clear();
+    g.cell_of.resize(nown);
+    for (std::int64_t i = 0; i < nown; ++i) {
+      const std::uint64_t k = cell_key(o_.x[i]);
+      g.cell_of[i] = g.cells.insert(k);
+      if (g.cell_of[i] == static_cast<std::int64_t>(g.cell_key.size())) g.cell_key.push_back(k);
+    }
+    const std::int64_t nc = g.cells.size();
+    g.border.resize(nc);
+    g.in_piece.clear();  // the decomposition may be new
+    g.in_piece_value.clear();
+    std::vector<std::pair<std::uint64_t, std::int64_t>> pub;
+    for (std::int64_t c = 0; c < nc; ++c) {
+      g.border[c] = !interior(g.cell_key[c]);
+      if (g.border[c]) pub.push_back({g.cell_key[c], me_});
+    }
+    // The other ranks' published cells: (cell, rank) sorted, and each distinct cell's range.
+    g.occupied.clear();
+    for (const auto& [c, r] : allgatherv(comm_, pub, &band_bytes_))
+      if (r != me_) g.occupied.push_back({c, static_cast<int>(r)});
+    std::sort(g.occupied.begin(), g.occupied.end());
+    g.occupied_cells.clear();
+    g.occupied_off.clear();
+    for (std::size_t k = 0; k < g.occupied.size(); ++k)
+      if (g.occupied_cells.insert(g.occupied[k].first) ==
+          static_cast<std::int64_t>(g.occupied_off.size()))
+        g.occupied_off.push_back(static_cast<std::int64_t>(k));
+    g.occupied_off.push_back(static_cast<std::int64_t>(g.occupied.size()));
+    // Per cell, the other ranks within the band (sorted, once each).
+    g.cell_off.assign(1, 0);
+    g.cell_ranks.clear();
+    for (std::int64_t c = 0; c < nc; ++c) {
+      if (g.border[c]) {
+        const std::size_t first = g.cell_ranks.size();
+        band_.for_each_neighbour(band_cell_of_key(g.cell_key[c]), [&](std::uint64_t k) {
+          const std::int64_t d = g.occupied_cells.find(k);
+          if (d < 0) return;
+          for (std::int64_t q = g.occupied_off[d]; q < g.occupied_off[d + 1]; ++q)
+            g.cell_ranks.push_back(g.occupied[q].second);
+        });
+        std::sort(g.cell_ranks.begin() + first, g.cell_ranks.end());
+        g.cell_ranks.erase(std::unique(g.cell_ranks.begin() + first, g.cell_ranks.end()),
+                           g.cell_ranks.end());
+      }
+      g.cell_off.push_back(static_cast<std::int64_t>(g.cell_ranks.size()));
+    }
+    // Per particle, its cell's ranks.
+    g.off.resize(nown + 1);
+    g.off[0] = 0;
+    for (std::int64_t i = 0; i < nown; ++i)
+      g.off[i + 1] = g.off[i] + g.cell_off[g.cell_of[i] + 1] - g.cell_off[g.cell_of[i]];
+    g.ranks.resize(g.off[nown]);
+    for_each(HostExec{}, nown, [&](std::int64_t i) {
+      std::copy(g.cell_ranks.begin() + g.cell_off[g.cell_of[i]],
+                g.cell_ranks.begin() + g.cell_off[g.cell_of[i] + 1], g.ranks.begin() + g.off[i]);
+    });
+  }
+
   // True when every point of the 5^3 band cells around cell `key` belongs to this rank: the
   // box lies in at most 2 x 2 x 2 cells of some tree level, and each of their curve segments
   // (keys are hierarchical, sfc.hpp) lies in this rank's piece. Conservative: false may be
   // answered for an interior cell (it is then published needlessly), never true for another.
   // Periodic z: a box across the seam is not interior.
-  bool interior(std::uint64_t key) const {
+  bool interior(std::uint64_t key) {
     const SfcGrid& g = dec_.grid;
     const std::uint64_t first = dec_.splitters[me_], last = dec_.splitters[me_ + 1];
     if (first >= last) return false;
-    constexpr std::int64_t off = std::int64_t{1} << 20;
-    const std::int64_t c[3] = {static_cast<std::int64_t>(key >> 42) - off,
-                               static_cast<std::int64_t>((key >> 21) & 0x1fffff) - off,
-                               static_cast<std::int64_t>(key & 0x1fffff) - off};
+    const BandCell b = band_cell_of_key(key);
+    const std::int64_t* c = b.i;
     if (band_.nz > 0 && (c[2] < 2 || c[2] + 3 > band_.nz)) return false;
     // The box's finest cells, one more on each side against round-off in band_cell's floor.
     std::uint32_t lo[3], hi[3];
@@ -213,9 +247,17 @@ class MpiFluidExchange final : public FluidExchange {
     for (std::uint32_t x = lo[0] / s; x <= hi[0] / s; ++x)
       for (std::uint32_t y = lo[1] / s; y <= hi[1] / s; ++y)
         for (std::uint32_t z = lo[2] / s; z <= hi[2] / s; ++z) {
-          const std::uint64_t k = sfc_key(g.curve, x * s, y * s, z * s, g.order);
-          const std::uint64_t seg = k - k % span;
-          if (seg < first || seg + span > last) return false;
+          // Neighbouring band cells test the same tree cells: each one's answer is kept
+          // (g_.in_piece; s < 2^16 and coordinates < 2^16 name it).
+          const std::int64_t m = g_.in_piece.insert(std::uint64_t{s} << 48 |
+                                                    std::uint64_t{x} << 32 |
+                                                    std::uint64_t{y} << 16 | z);
+          if (m == static_cast<std::int64_t>(g_.in_piece_value.size())) {
+            const std::uint64_t k = sfc_key(g.curve, x * s, y * s, z * s, g.order);
+            const std::uint64_t seg = k - k % span;
+            g_.in_piece_value.push_back(seg >= first && seg + span <= last);
+          }
+          if (!g_.in_piece_value[m]) return false;
         }
     return true;
   }
@@ -274,6 +316,23 @@ class MpiFluidExchange final : public FluidExchange {
   std::int64_t halo_bytes_ = 0, migrated_bytes_ = 0, band_bytes_ = 0;
   Decomposition dec_;
   std::unique_ptr<HaloPlan> halo_;
+  // distribute()'s work arrays, kept so that a rebuild reuses their storage.
+  struct GhostScratch {
+    KeyIndex cells;                       // the distinct band cells of the owned particles
+    std::vector<std::uint64_t> cell_key;  // per cell
+    std::vector<std::int64_t> cell_of;    // per particle: its cell
+    std::vector<std::uint8_t> border;     // per cell: not interior
+    KeyIndex in_piece;                    // interior(): tree cells tested, and the answers
+    std::vector<std::uint8_t> in_piece_value;
+    std::vector<std::pair<std::uint64_t, int>> occupied;  // other ranks' (cell, rank), sorted
+    KeyIndex occupied_cells;                              // its distinct cells
+    std::vector<std::int64_t> occupied_off;               // per distinct cell: its range
+    std::vector<std::int64_t> cell_off, off;  // per cell / per particle: a range of ranks
+    std::vector<int> cell_ranks, ranks;
+  };
+  std::vector<int> dest_;  // per particle: its new owner
+  FluidParticles o_;       // the new layout being built (between calls: the last input)
+  GhostScratch g_;
 };
 
 }  // namespace

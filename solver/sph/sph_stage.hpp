@@ -28,6 +28,7 @@
 #include <memory>
 #include <numeric>
 #include <type_traits>
+#include <utility>
 
 #include "core/error.hpp"
 #include "core/error_flag.hpp"
@@ -523,9 +524,13 @@ class SphStage final : public FluidStage {
                      owned(key_.to_host(), slot),  {}};
     if (laid_out_) q.cost = owned(cost_.to_host(), slot);  // measured by the last compute()
     const std::int64_t nown = ex_->distribute(q);
+    // (key, slot) pairs sorted: contiguous, unlike an index sort comparing through q.key (keys
+    // are unique: each is its owner's place for the particle).
+    std::vector<std::pair<std::uint64_t, std::int64_t>> by_key(q.size());
+    for (std::size_t k = 0; k < q.size(); ++k) by_key[k] = {q.key[k], static_cast<std::int64_t>(k)};
+    std::sort(by_key.begin(), by_key.end());
     std::vector<std::int64_t> ord(q.size());
-    std::iota(ord.begin(), ord.end(), std::int64_t{0});
-    std::sort(ord.begin(), ord.end(), [&](auto a, auto b) { return q.key[a] < q.key[b]; });
+    for (std::size_t k = 0; k < q.size(); ++k) ord[k] = by_key[k].second;
     auto in_order = [&](const auto& v) {
       std::remove_cvref_t<decltype(v)> o(v.size());
       for (std::size_t k = 0; k < ord.size(); ++k) o[k] = v[ord[k]];
@@ -660,14 +665,15 @@ class SphStage final : public FluidStage {
   }
 
  private:
-  // The entries of the owned particles (slot < n_own_) of a host copy of a local array.
+  // The entries of the owned particles (slot < n_own_) of a host copy of a local array
+  // (compacted in place: a fresh copy from to_host() is not copied again).
   template <class T>
-  std::vector<T> owned(const std::vector<T>& v, const std::vector<std::int64_t>& slot) const {
-    std::vector<T> o;
-    o.reserve(static_cast<std::size_t>(n_own_));
+  std::vector<T> owned(std::vector<T> v, const std::vector<std::int64_t>& slot) const {
+    std::size_t k = 0;
     for (std::size_t i = 0; i < v.size(); ++i)
-      if (slot[i] < n_own_) o.push_back(v[i]);
-    return o;
+      if (slot[i] < n_own_) v[k++] = v[i];
+    v.resize(k);
+    return v;
   }
 
   // The rank's particles (all owned, slot = index); the per-step arrays sized to them.
