@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -121,10 +122,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       // 2 slack; two rings of band cells of width diam + D_DEM + slack cover it. diam: the
       // largest primitive diameter, +25 % for deformation.
       const double diam = 2.5 * ix_.prim_radius, d = m.contact.d_dem;
-      slack_ = 0.5 * (diam + d);
-      band_ = diam + d + slack_;
-      for (std::int64_t i = m.n_free_vertices; i < m.n_vertices(); ++i)
-        if (ix_.contact_vertex[i]) fixed_cells_[cell_key(m.X[i])].push_back(i);
+      reach_ = diam + d;
+      slack0_ = 0.5 * reach_;
+      set_slack(slack0_);
     }
     precompute_fixed_output();
     // Every rank starts from a contiguous share of the model's initial state, then the first
@@ -144,10 +144,12 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   // (parallel.setup_s), not in the stepping loop's phases.
   void adopt(const StateSlice& s) override {
     if (!g_) throw std::logic_error("DistributedBackend::adopt before upload");
-    const double b0 = seconds("balance"), m0 = seconds("migration");
+    const double b0 = seconds("balance"), m0 = seconds("migration"), t0 = MPI_Wtime();
     redistribute(s, true, true);
     setup_balance_s_ += seconds("balance") - b0;
     setup_migration_s_ += seconds("migration") - m0;
+    rebuilt_at_ = MPI_Wtime();
+    rebuild_s_ = rebuilt_at_ - t0;  // what a rebuild costs, until one is measured
   }
 
   // ---- stages ------------------------------------------------------------------------------
@@ -342,14 +344,17 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   // Sub-phases, the largest over ranks (parallel.phases_* has max and mean of the phases):
   // contact's, and where the halo and elements time of a step goes (halo.skin: the contact
   // band's displacement test; halo.xv: the ghosts' x, v; halo.shares: the contact force shares'
-  // exchange; elements.shares: collecting them from the backend).
+  // exchange; elements.shares: collecting them from the backend), and a rebuild's (export: the
+  // state from the backend; state: owners and migration plans; layout: the rank's new part
+  // and its model; upload: into the backend).
   std::map<std::string, double> stage_seconds() const override {
     std::map<std::string, double> mine = local_stage_seconds();
     for (const auto& [k, v] : timers_.seconds())
       if (k.find('.') != std::string::npos) mine[k] = v;
-    static constexpr const char* keys[] = {"contact.broad", "contact.narrow", "contact.force",
-                                           "halo.skin",     "halo.xv",        "halo.shares",
-                                           "elements.shares"};
+    static constexpr const char* keys[] = {
+        "contact.broad",    "contact.narrow",   "contact.force",   "halo.skin",
+        "halo.xv",          "halo.shares",      "elements.shares", "migration.export",
+        "migration.state",  "migration.layout", "migration.upload"};
     constexpr int n = std::size(keys);
     double v[n], mx[n];
     for (int k = 0; k < n; ++k) {
@@ -513,6 +518,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     r.ranks = np_;
     r.curve = curve_name(curve_);
     r.rebalances = rebalances_;
+    r.rebuilds = rebuilds_;
+    r.contact_slack = slack_;
     r.imbalance = last_imbalance_;
     r.imbalance_initial = imbalance_initial_;
     r.rebalance_log = log_;
@@ -789,17 +796,49 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       rebalance = np_ > 1 && imb > opt_.rebalance_threshold;
     }
     if (!rebuild && !rebalance) return;
+    if (rebuild && !rebalance) adapt_slack();
+    const double t0 = MPI_Wtime();
     const std::int64_t before = migrated_bytes_;
-    StateSlice s = export_state();
-    s.f.clear();  // compute_forces evaluates them after the rebuild
+    StateSlice s;
+    {
+      auto scope = timers_.scope("migration");
+      auto s1 = timers_.scope("migration.export");
+      s = export_state();
+      s.f.clear();  // compute_forces evaluates them after the rebuild
+    }
     // A new cut that moves no vertex (timing noise) keeps the rank's model; a moved band
     // always rebuilds the ghosts.
     redistribute(s, rebalance, rebuild);
+    rebuilt_at_ = MPI_Wtime();
+    rebuild_s_ = rebuilt_at_ - t0;
     if (rebalance) {
       ++rebalances_;
       log_.push_back({steps_, last_imbalance_, predicted_after_, migrated_bytes_ - before});
       pending_after_ = true;
     }
+  }
+
+  // The contact band for a slack (docs/parallel.md item 4): cells of diam + D_DEM + slack, in
+  // which the fixed bodies' contact vertices are binned once.
+  void set_slack(double slack) {
+    const Model& m = *g_;
+    slack_ = slack;
+    band_ = reach_ + slack;
+    fixed_cells_.clear();
+    for (std::int64_t i = m.n_free_vertices; i < m.n_vertices(); ++i)
+      if (ix_.contact_vertex[i]) fixed_cells_[cell_key(m.X[i])].push_back(i);
+  }
+
+  // Before a rebuild the motion asked for: when the last rebuild took more than kRebuildShare
+  // of the stepping time since it (the largest over ranks), the next layout gets twice the
+  // slack, up to kMaxSlack x the first: rebuilds a GPU rank pays ~0.1 s for (a model's upload)
+  // become rarer for a wider ghost band. The same decision on every rank.
+  void adapt_slack() {
+    static constexpr double kRebuildShare = 0.1, kMaxSlack = 4;
+    double t[2] = {rebuild_s_, MPI_Wtime() - rebuilt_at_};
+    MPI_Allreduce(MPI_IN_PLACE, t, 2, MPI_DOUBLE, MPI_MAX, comm_);
+    if (t[0] > kRebuildShare * t[1] && slack_ < kMaxSlack * slack0_)
+      set_slack(std::min(2 * slack_, kMaxSlack * slack0_));
   }
 
   double seconds(const char* phase) const {
@@ -861,6 +900,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       predicted_after_ = dec_.predicted_imbalance;
     }
     auto scope = timers_.scope("migration");
+    std::optional<PhaseTimers::Scope> part;
+    part.emplace(timers_, "migration.state");
     std::int64_t bytes = 0;
     // New owners; every rank learns the changes (owner_ covers all free vertices).
     std::vector<int> dest(nsv);
@@ -980,12 +1021,15 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       mine.diss_t.push_back(td[k]);
     }
     mine.contact = std::move(hist);
+    part.reset();
     install(mine);
   }
 
   // Builds the rank's part from its owned state (vertices in gid order, the state of every
   // tet it will hold, its contact history) and uploads it.
   void install(const StateSlice& s) {
+    std::optional<PhaseTimers::Scope> part;
+    part.emplace(timers_, "migration.layout");
     const Model& g = *g_;
     LocalLayout L;
     L.vertices = s.vertex;
@@ -1099,6 +1143,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       v.push_back(g.v[L.vertices[i]]);
     }
     LocalModel lm = build_local_model(g, ix_, L, x, v);
+    part.reset();
+    part.emplace(timers_, "migration.upload");
 
     // Keep the old contact stage's counters, then replace the rank's model.
     for (const auto& [k, sec] : local_->stage_seconds()) contact_acc_[k] += sec;
@@ -1215,6 +1261,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   std::unique_ptr<HaloPlan> halo_;
   bool contact_ = false, preload_ = false, relaxing_ = false;
   double band_ = 1, slack_ = 0;
+  double reach_ = 0, slack0_ = 0;           // diam + D_DEM; the first slack (set_slack)
+  double rebuild_s_ = 0, rebuilt_at_ = 0;  // the last rebuild's seconds, its end (MPI_Wtime)
   std::unordered_map<std::uint64_t, std::vector<std::int64_t>> fixed_cells_;
   std::int64_t n_contact_owned_ = 0;
   std::vector<std::array<double, 6>> fixed_stress_;

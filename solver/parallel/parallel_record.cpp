@@ -15,6 +15,8 @@ Json ParallelRecord::to_json() const {
   j["ranks"] = ranks;
   j["curve"] = curve;
   j["rebalances"] = rebalances;
+  j["rebuilds"] = rebuilds;
+  j["contact_slack"] = contact_slack;
   j["imbalance"] = imbalance;
   j["imbalance_initial"] = imbalance_initial;
   j["migrated_bytes"] = migrated_bytes;

@@ -3,6 +3,9 @@
 // rebalancing and its own phase times.
 //
 //   ranks, curve, rebalances
+//   rebuilds             the bodies' layouts installed (the first, the rebalances and the ghost
+//                        rebuilds a vertex's motion past the contact slack asked for)
+//   contact_slack        the contact band's slack at the end [m] (grows when rebuilds are dear)
 //   imbalance            max / mean - 1 over ranks of the busy time (elements, integration,
 //                        contact) of the last measurement window (rebalance_every steps)
 //   imbalance_initial    the same over the first window, before any rebalancing
@@ -49,7 +52,8 @@ struct RebalanceEntry {
 struct ParallelRecord {
   int ranks = 1;
   std::string curve = "hilbert";
-  std::int64_t rebalances = 0;
+  std::int64_t rebalances = 0, rebuilds = 0;
+  double contact_slack = 0;
   double imbalance = 0, imbalance_initial = 0;
   std::int64_t migrated_bytes = 0;
   double halo_bytes_per_step = 0;

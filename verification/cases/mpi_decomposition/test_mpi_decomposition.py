@@ -14,7 +14,7 @@ from harness import must
 from harness.qdemsph import mpirun_command
 
 HERE = Path(__file__).resolve().parent
-PARALLEL_KEYS = {"ranks", "curve", "rebalances", "imbalance", "imbalance_initial", "migrated_bytes",
+PARALLEL_KEYS = {"ranks", "curve", "rebalances", "rebuilds", "contact_slack", "imbalance", "imbalance_initial", "migrated_bytes",
                  "halo_bytes_per_step", "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "fluid_rebuilds", "setup_s",
                  "owned_vertices",
                  "owned_tets", "phases_max", "phases_mean", "rebalance_log"}
