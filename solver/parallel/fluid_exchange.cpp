@@ -34,8 +34,11 @@ class MpiFluidExchange final : public FluidExchange {
         every_(o.rebalance_every),
         threshold_(o.rebalance_threshold),
         max_cell_(o.max_cell_cost),
-        skin_(kFluidSkin * f.params.kernel.support()),
-        band_((f.params.kernel.support() + skin_) / 2, f.z0, f.period_z) {
+        support_(f.params.kernel.support()),
+        z0_(f.z0),
+        period_(f.period_z),
+        skin_(kFluidSkin * support_),
+        band_((support_ + skin_) / 2, z0_, period_) {
     MPI_Comm_dup(comm, &comm_);
     MPI_Comm_rank(comm_, &me_);
     MPI_Comm_size(comm_, &np_);
@@ -97,6 +100,7 @@ class MpiFluidExchange final : public FluidExchange {
     } else {
       MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_DOUBLE, MPI_MAX, comm_);
       if (moved <= skin_ / 2) return true;
+      widen_skin();
     }
     after_keep_ = true;
     return false;
@@ -136,7 +140,7 @@ class MpiFluidExchange final : public FluidExchange {
   FluidTraffic traffic() override {
     std::int64_t b[3] = {halo_bytes_, migrated_bytes_, band_bytes_};
     MPI_Allreduce(MPI_IN_PLACE, b, 3, MPI_INT64_T, MPI_SUM, comm_);
-    return {evaluations_, rebuilds_, b[0], b[1], b[2]};
+    return {evaluations_, rebuilds_, b[0], b[1], b[2], skin_};
   }
 
  private:
@@ -277,8 +281,9 @@ class MpiFluidExchange final : public FluidExchange {
     return threshold_ == 0 || recut_pays(1 - mean / most[0], most[1], every_, most[2]);
   }
 
-  // The wall time between keep() calls: a step's (window_s_ / window_n_), or, for the interval
-  // that holds a layout rebuild a keep() asked for, the rebuild's (less a step).
+  // The wall time between keep() calls: a step's (window_s_ / window_n_, and since_s_ since
+  // the last rebuild), or, for the interval that holds a layout rebuild a keep() asked for,
+  // the rebuild's (less a step).
   void time_step() {
     const double now = MPI_Wtime();
     if (last_keep_ > 0) {
@@ -287,11 +292,29 @@ class MpiFluidExchange final : public FluidExchange {
         rebuild_s_ = std::max(rebuild_s_, dt - (window_n_ > 0 ? window_s_ / window_n_ : 0.0));
       } else {
         window_s_ += dt;
+        since_s_ += dt;
         ++window_n_;
       }
     }
     rebuilt_ = false;
     last_keep_ = now;
+  }
+
+  // Before a rebuild the motion asked for: when a rebuild costs more than kRebuildShare of the
+  // stepping time since the last one (the largest over ranks), the next layout gets twice the
+  // skin, up to kMaxSkin x kFluidSkin: a wider ghost band (more ghosts to refresh), rebuilt
+  // rarer (a GPU rank's rebuild of 1.1 M particles takes ~0.7 s on the host). The same
+  // decision on every rank.
+  void widen_skin() {
+    static constexpr double kRebuildShare = 0.1, kMaxSkin = 4;
+    double t[2] = {rebuild_s_, since_s_};
+    MPI_Allreduce(MPI_IN_PLACE, t, 2, MPI_DOUBLE, MPI_MAX, comm_);
+    since_s_ = 0;
+    const double most = kMaxSkin * kFluidSkin * support_;
+    if (t[0] > kRebuildShare * t[1] && skin_ < most) {
+      skin_ = std::min(2 * skin_, most);
+      band_ = BandGrid((support_ + skin_) / 2, z0_, period_);
+    }
   }
 
   Space space_;  // where the stage's arrays live (a GPU stage's ghosts may stay on the device)
@@ -300,13 +323,14 @@ class MpiFluidExchange final : public FluidExchange {
   Curve curve_;
   long every_ = 0;
   double threshold_ = 0, max_cell_ = 0;
-  double skin_ = 0;         // the ghost band's margin beyond the kernel support
+  double support_, z0_, period_;  // the kernel support; the band grid's z origin and period
+  double skin_ = 0;         // the ghost band's margin beyond the kernel support (widen_skin)
   BandGrid band_;           // band cells: half of support + skin wide, wrapping a periodic z
   long steps_ = 0;          // keep() calls
   bool rebalance_ = false;  // the next distribute() cuts the partition again
   // Wall times the re-cut decision weighs (time_step): steps since the last measurement, and
   // the longest layout rebuild so far (the exchange's part, then the whole interval).
-  double last_keep_ = 0, window_s_ = 0, rebuild_s_ = 0;
+  double last_keep_ = 0, window_s_ = 0, since_s_ = 0, rebuild_s_ = 0;
   long window_n_ = 0;
   bool rebuilt_ = false;  // a keep()-asked distribute() ran since the last keep()
   // Traffic (this rank's bytes sent): evaluations counts keep() calls and the distribute()

@@ -51,6 +51,7 @@ struct FluidTraffic {
   std::int64_t halo_bytes = 0;      // ghost slots filled at each distribute() and refreshed
   std::int64_t migrated_bytes = 0;  // particles moved to new owners at each distribute()
   std::int64_t band_bytes = 0;      // border band cells allgathered at each distribute()
+  double skin = 0;                  // the ghost band's skin at the end [m] (it may widen)
 };
 
 class FluidExchange {
