@@ -85,6 +85,7 @@ class Network:
     stage_bandwidth: float = 0.0
     note: str = ""
     round_trip: float = 0.0  # per host round trip of a GPU rank (Options.round_trips)
+    stage_offnode_only: bool = False  # on a node halos stay in device memory (CUDA IPC)
 
 
 # Defaults, stated (vendor figures, derated to what MPI typically achieves):
@@ -100,8 +101,26 @@ class Network:
 #    staging, references/benchmarks/scaling/2026-11-25_h100x2/): topple-weak on 2 GPUs took
 #    1.70 ms/step against 1.25 predicted without it, (1.70 - 1.25) / 3 round trips; with it the
 #    model gives cubes-weak 5.82 (measured 5.99) and dambreak-weak 6.70 (measured 7.06) ms/step.
+# Host round trip of a GPU rank with device-resident halos (ipc-ndr): least squares over the
+# three weak cases on two H100s at 01b2aab (references/benchmarks/scaling/2026-11-25_h100x2_ipc/),
+# their in-run rebuilds taken out: measured minus predicted without it, cubes -0.009 ms (3 round
+# trips), dominoes +0.227 ms (3), dam break +0.41 ms (4) -> 67 us per round trip.
+IPC_ROUND_TRIP = 67e-6
+
+#  * CUDA IPC peer copies between the two H100s of one host (NVLink, scaling/probes/devicecomm.cu,
+#    2026-11-25): 8 B 7.6 us (copy + stream synchronisation), 1 MB 10.7 us (98 GB/s), 16 MB 53 us
+#    (316 GB/s); the hand-shake messages add ~1 us. The host round trip of a GPU rank with these
+#    halos: calibrated on cubes-weak (no rebuilds), see "ipc-ndr".
 NETWORKS = {
-    # What the code does today on GPUs: halo packed on the host (D2H, MPI, H2D).
+    # What the code does today on GPUs: on a node, halo records stay in device memory and move
+    # by CUDA IPC peer copies (CommEngine::use_device); between nodes they are staged through
+    # host memory (D2H, MPI, H2D): the GPU machines' Open MPI is not CUDA-aware.
+    "ipc-ndr": Network("ipc-ndr", 8e-6, 100e9, 2e-6, 45e9, 8, 10e-6, 25e9, round_trip=IPC_ROUND_TRIP,
+                       stage_offnode_only=True,
+                       note="GPU halos in device memory on a node (CUDA IPC over NVLink, measured), staged "
+                       "through host memory between nodes over InfiniBand NDR; 8 GPUs per node; host round "
+                       "trips calibrated on two H100s"),
+    # Before 2026-11-25 (4990d7e): every GPU halo packed on the host (D2H, MPI, H2D).
     "staged-ndr": Network("staged-ndr", 0.5e-6, 8e9, 2e-6, 45e9, 8, 10e-6, 25e9, round_trip=150e-6,
                           note="GPU halos staged through host memory over PCIe Gen5; host MPI over shared "
                           "memory on a node and InfiniBand NDR between nodes; 8 GPUs per node; "
@@ -141,6 +160,9 @@ class Options:
     migrated_bytes: float = 0.0   # per rebalance, per rank
     pairs_per_surface_vertex: float = 0.0
     ghost_pair_weight: float = 1.4  # k: candidate pairs per ghost surface vertex / per owned one
+    rebuild_s_per_step: float = 0.0  # ghost / layout rebuilds during the run, amortised (measured:
+    #                                  a host-side rebuild times rebuilds per step; the same per
+    #                                  rank in weak scaling, the global displacement triggers it)
 
 
 def _terms(geo: dict, r: int, costs: Costs, net: Network, opt: Options, N: int) -> dict:
@@ -171,7 +193,8 @@ def _terms(geo: dict, r: int, costs: Costs, net: Network, opt: Options, N: int) 
     b_off = gv_off * opt.vertex_bytes + gp_off * opt.particle_bytes
     lat = (k - k_off) * net.intra_latency + k_off * net.inter_latency
     bw = (b_on / net.intra_bandwidth if b_on else 0.0) + (b_off / net.inter_bandwidth if b_off else 0.0)
-    stage = 2 * (net.stage_latency + (b_on + b_off) / net.stage_bandwidth) if net.stage_bandwidth > 0 else 0.0
+    b_stage = b_off if net.stage_offnode_only else b_on + b_off
+    stage = 2 * (net.stage_latency + b_stage / net.stage_bandwidth) if net.stage_bandwidth > 0 and b_stage else 0.0
     rt = opt.round_trips * net.round_trip
     X = opt.exchanges * (lat + bw + stage) + rt
     return {"compute": C, "exchange_raw": X, "exchange": max(0.0, X - opt.overlap * C),
@@ -215,14 +238,15 @@ def step_time(geo: dict, costs: Costs, net: Network, opt: Options) -> dict:
     if opt.rebalance_interval > 0 and N > 1:
         bwm = net.intra_bandwidth if N <= net.ranks_per_node else net.inter_bandwidth
         reb = (opt.migrated_bytes / bwm + N * lat_ar) / opt.rebalance_interval
-    T = busy * (1 + jit) + ar + reb
+    rb = opt.rebuild_s_per_step if N > 1 else 0.0
+    T = busy * (1 + jit) + ar + reb + rb
     x = per[xr]
     return {"ranks": N, "geometry_from_ranks": n_rows, "step_s": T, "critical_rank": xr, "compute_s": compute,
             "compute_mean_s": mean_c, "exchange_s": x["exchange"], "exchange_raw_s": x["exchange_raw"],
             "latency_s": x.get("latency", 0.0), "bandwidth_s": x.get("bandwidth", 0.0),
             "staging_s": x.get("staging", 0.0), "round_trip_s": x.get("round_trips", 0.0),
             "halo_bytes_per_exchange": x.get("bytes", 0.0),
-            "jitter_s": busy * jit, "allreduce_s": ar, "rebalance_s": reb, "rebalanced": balanced,
+            "jitter_s": busy * jit, "allreduce_s": ar, "rebalance_s": reb, "rebuild_s": rb, "rebalanced": balanced,
             "imbalance_static": static_imb, "imbalance": compute / mean_c - 1 if mean_c > 0 else 0.0}
 
 
@@ -333,6 +357,9 @@ def main(argv=None):
     p.add_argument("--static", action="store_true", help="static partition (no rebalancing)")
     p.add_argument("--round-trips", type=int, default=None,
                    help="host round trips per step of a GPU rank (default: 4 with fluid, else 3)")
+    p.add_argument("--rebuild-ms-per-step", type=float, default=0.0,
+                   help="ghost / layout rebuilds during the run, amortised per step (measured: parallel "
+                        "migration per step of a 2-rank record)")
     p.add_argument("--ghost-pairs", type=float, default=1.4,
                    help="k, candidate pairs of a ghost surface vertex per owned one (1.4 measured; 0: pairs once)")
     p.add_argument("--json", help="write the prediction here")
@@ -376,11 +403,12 @@ def main(argv=None):
     if rt is None:
         rt = round_trips(any(sum(g.get("owned_particles", [0])) > 0 for g in geo["rows"]))
     opt = Options(overlap=a.overlap, jitter=a.jitter, pairs_per_surface_vertex=ppv, ghost_pair_weight=a.ghost_pairs,
-                  rebalance_threshold=None if a.static else a.threshold, round_trips=rt)
+                  rebalance_threshold=None if a.static else a.threshold, round_trips=rt,
+                  rebuild_s_per_step=a.rebuild_ms_per_step * 1e-3)
     pred = predict(rows, costs, NETWORKS[a.network], opt)
     print(f"PREDICTION (model, not a measurement): {geo.get('sweep')} ({geo.get('backend_preset')} preset), "
           f"costs {a.costs}, network {a.network}, overlap {a.overlap}, jitter {a.jitter}, ghost pairs k {a.ghost_pairs}, "
-          f"round trips {rt}, "
+          f"round trips {rt}, rebuilds {a.rebuild_ms_per_step} ms/step, "
           f"{'static partition' if a.static else f'rebalance threshold {a.threshold}'}")
     print(f"{'N':>5} {'ms/step':>9} {'compute':>9} {'exch':>8} {'lat':>7} {'bw':>7} {'stage':>7} {'imb %':>6} {'E vs 1':>7} {'E vs 8':>7}")
     for o in pred:

@@ -173,3 +173,16 @@ def test_host_round_trips_add_a_fixed_time_per_step():
     one_rank = model.step_time(rows([1])[0], COSTS, net, replace(NOJIT, round_trips=3))
     assert one_rank["step_s"] == pytest.approx(1000 * 1e-9 + 200 * 1e-9)  # no exchange on one rank
     assert model.round_trips(True) == 4 and model.round_trips(False) == 3
+
+
+def test_device_resident_halos_stage_only_what_leaves_the_node_and_rebuilds_add_per_step():
+    staged = replace(NET, stage_latency=1e-5, stage_bandwidth=1e9)
+    g = rows([2])[0]
+    on_node = model.step_time(g, COSTS, staged, NOJIT)
+    assert on_node["staging_s"] > 0  # host staging of every halo byte
+    ipc = model.step_time(g, COSTS, replace(staged, stage_offnode_only=True), NOJIT)
+    assert ipc["staging_s"] == 0.0  # both ranks on one node: nothing crosses PCIe
+    reb = model.step_time(g, COSTS, NET, replace(NOJIT, rebuild_s_per_step=1.6e-3))
+    assert reb["step_s"] - model.step_time(g, COSTS, NET, NOJIT)["step_s"] == pytest.approx(1.6e-3)
+    one_rank = model.step_time(rows([1])[0], COSTS, NET, replace(NOJIT, rebuild_s_per_step=1.6e-3))
+    assert one_rank["rebuild_s"] == 0.0  # one rank rebuilds nothing
