@@ -9,6 +9,7 @@
 #include <unordered_map>
 
 #include "core/error.hpp"
+#include "core/exec_host.hpp"
 #include "core/timers.hpp"
 #include "parallel/balance.hpp"
 #include "parallel/band_cells.hpp"
@@ -1034,24 +1035,28 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     LocalLayout L;
     L.vertices = s.vertex;
     L.n_owned = static_cast<std::int64_t>(s.vertex.size());
-    // Held tets: every free tet with an owned vertex; interior, boundary home, halo.
-    std::vector<std::int64_t> held;
-    for (std::int64_t gv : s.vertex)
-      held.insert(held.end(), ix_.vt.begin() + ix_.vt_off[gv], ix_.vt.begin() + ix_.vt_off[gv + 1]);
-    std::sort(held.begin(), held.end());
-    held.erase(std::unique(held.begin(), held.end()), held.end());
-    std::vector<std::int64_t> boundary, halo;
-    for (std::int64_t t : held) {
+    // Held tets: every free tet with an owned vertex (the owned vertices are those owner_
+    // gives this rank), in id order; interior, boundary home, halo. Each tet's class is
+    // decided in parallel, the lists are collected in order.
+    std::vector<std::uint8_t> cls(g.n_free_tets);
+    enum : std::uint8_t { kInterior, kBoundary, kHalo, kNotHeld };
+    for_each(HostExec{}, g.n_free_tets, [&](std::int64_t t) {
       const auto& tv = g.tets[t];
-      bool all = true;
-      for (int q = 0; q < 4; ++q) all = all && owner_[tv[q]] == me_;
-      if (all)
+      int owned = 0;
+      for (int q = 0; q < 4; ++q) owned += owner_[tv[q]] == me_;
+      cls[t] = owned == 4                                               ? kInterior
+               : owner_[*std::min_element(tv.begin(), tv.end())] == me_ ? kBoundary
+               : owned > 0                                              ? kHalo
+                                                                        : kNotHeld;
+    });
+    std::vector<std::int64_t> boundary, halo;
+    for (std::int64_t t = 0; t < g.n_free_tets; ++t)
+      if (cls[t] == kInterior)
         L.tets.push_back(t);
-      else if (owner_[*std::min_element(tv.begin(), tv.end())] == me_)
+      else if (cls[t] == kBoundary)
         boundary.push_back(t);
-      else
+      else if (cls[t] == kHalo)
         halo.push_back(t);
-    }
     L.n_interior = static_cast<std::int64_t>(L.tets.size());
     L.tets.insert(L.tets.end(), boundary.begin(), boundary.end());
     L.n_home = static_cast<std::int64_t>(L.tets.size());
@@ -1092,18 +1097,34 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
 
     // Halo: an owned vertex goes to the owners of its tets' other vertices (they hold those
     // tets) and, for contact vertices, to the ranks with owned contact vertices in the band.
-    std::vector<std::int64_t> off{0};
-    std::vector<int> ranks;
-    for (std::int64_t i = 0; i < L.n_owned; ++i) {
+    // Each vertex's list is sorted, without this rank and repeats (what HaloPlan keeps),
+    // counted then written in parallel; the band's lists come first (cached per cell).
+    std::vector<const std::vector<int>*> band(L.n_owned, nullptr);
+    if (contact_)
+      for (std::int64_t i = 0; i < L.n_owned; ++i)
+        if (ix_.contact_vertex[s.vertex[i]]) band[i] = &band_ranks(s.x[i]);
+    auto other_ranks = [&](std::int64_t i, std::vector<int>& r) {
       const std::int64_t gv = s.vertex[i];
       for (std::int64_t q = ix_.vt_off[gv]; q < ix_.vt_off[gv + 1]; ++q)
-        for (auto u : g.tets[ix_.vt[q]]) ranks.push_back(owner_[u]);
-      if (contact_ && ix_.contact_vertex[gv]) {
-        const auto& r = band_ranks(s.x[i]);
-        ranks.insert(ranks.end(), r.begin(), r.end());
-      }
-      off.push_back(static_cast<std::int64_t>(ranks.size()));
-    }
+        for (auto u : g.tets[ix_.vt[q]])
+          if (owner_[u] != me_) r.push_back(owner_[u]);
+      if (band[i]) r.insert(r.end(), band[i]->begin(), band[i]->end());
+      std::sort(r.begin(), r.end());
+      r.erase(std::unique(r.begin(), r.end()), r.end());
+    };
+    std::vector<std::int64_t> off(L.n_owned + 1, 0);
+    for_each(HostExec{}, L.n_owned, [&](std::int64_t i) {
+      std::vector<int> r;  // allocates only on a border vertex
+      other_ranks(i, r);
+      off[i + 1] = static_cast<std::int64_t>(r.size());
+    });
+    std::partial_sum(off.begin(), off.end(), off.begin());
+    std::vector<int> ranks(off[L.n_owned]);
+    for_each(HostExec{}, L.n_owned, [&](std::int64_t i) {
+      std::vector<int> r;
+      other_ranks(i, r);
+      std::copy(r.begin(), r.end(), ranks.begin() + off[i]);
+    });
     const std::vector<std::uint64_t> gids(s.vertex.begin(), s.vertex.end());
     halo_.reset();
     halo_ = std::make_unique<HaloPlan>(comm_, L.n_owned, off, ranks, gids);

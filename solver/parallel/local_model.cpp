@@ -1,10 +1,12 @@
 #include "parallel/local_model.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <stdexcept>
 #include <string>
 
 #include "contact/contact_record.hpp"
+#include "core/exec_host.hpp"
 
 namespace qdemsph {
 
@@ -50,13 +52,6 @@ ModelIndex index_model(const Model& g) {
   const ContactModel& c = g.contact;
   if (!c.enabled) return ix;
   const std::int64_t np = static_cast<std::int64_t>(c.prim_v.size());
-  build_csr(
-      nv, np,
-      [&](std::int64_t p, auto add) {
-        for (int k = 0; k < 4; ++k)
-          if (c.prim_v[p][k] >= 0) add(c.prim_v[p][k]);
-      },
-      ix.vp_off, ix.vp);
   for (std::int64_t p = 0; p < np; ++p) {
     Vec3 ctr{0, 0, 0};
     int n = 0;
@@ -154,6 +149,7 @@ LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLa
   LocalModel out;
   Model& m = out.model;
   std::vector<std::int32_t> g2l(g.n_vertices(), -1);
+  for (std::int64_t i = 0; i < nv; ++i) g2l[L.vertices[i]] = static_cast<std::int32_t>(i);
   auto local = [&](std::int64_t gid) {
     const std::int32_t l = g2l[gid];
     if (l < 0)
@@ -161,30 +157,38 @@ LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLa
                              " of a held item is not in the layout");
     return l;
   };
-  for (std::int64_t i = 0; i < nv; ++i) {
-    const std::int64_t gi = L.vertices[i];
-    g2l[gi] = static_cast<std::int32_t>(i);
-    m.X.push_back(g.X[gi]);
-    m.fext.push_back(g.fext[gi]);
-    m.fpre.push_back(g.fpre[gi]);
-    m.mass.push_back(g.mass[gi]);
-    m.inv_mass.push_back(g.inv_mass[gi]);
-    m.relax_inv_mass.push_back(g.relax_inv_mass[gi]);
-    m.flags.push_back(g.flags[gi]);
-    m.gid.push_back(g.gid[gi]);
-    m.body.push_back(g.body[gi]);
-  }
+  // Per-item copies from the global model, in parallel.
+  auto gather = [](const auto& from, const std::vector<std::int64_t>& idx, auto& to) {
+    to.resize(idx.size());
+    for_each(HostExec{}, static_cast<std::int64_t>(idx.size()),
+             [&](std::int64_t i) { to[i] = from[idx[i]]; });
+  };
+  gather(g.X, L.vertices, m.X);
+  gather(g.fext, L.vertices, m.fext);
+  gather(g.fpre, L.vertices, m.fpre);
+  gather(g.mass, L.vertices, m.mass);
+  gather(g.inv_mass, L.vertices, m.inv_mass);
+  gather(g.relax_inv_mass, L.vertices, m.relax_inv_mass);
+  gather(g.flags, L.vertices, m.flags);
+  gather(g.gid, L.vertices, m.gid);
+  gather(g.body, L.vertices, m.body);
   m.x = x;
   m.v = v;
-  for (const std::int64_t t : L.tets) {
-    std::array<std::int32_t, 4> tv;
-    for (int k = 0; k < 4; ++k) tv[k] = local(g.tets[t][k]);
-    m.tets.push_back(tv);
-    m.dX_inv.push_back(g.dX_inv[t]);
-    m.vol0.push_back(g.vol0[t]);
-    m.tet_material.push_back(g.tet_material[t]);
-    m.tet_gid.push_back(g.tet_gid[t]);
-  }
+  gather(g.dX_inv, L.tets, m.dX_inv);
+  gather(g.vol0, L.tets, m.vol0);
+  gather(g.tet_material, L.tets, m.tet_material);
+  gather(g.tet_gid, L.tets, m.tet_gid);
+  const std::int64_t nt = static_cast<std::int64_t>(L.tets.size());
+  m.tets.resize(nt);
+  std::atomic<std::int64_t> missing{-1};  // a vertex of a held tet not in the layout
+  for_each(HostExec{}, nt, [&](std::int64_t j) {
+    for (int k = 0; k < 4; ++k) {
+      const std::int64_t gi = g.tets[L.tets[j]][k];
+      m.tets[j][k] = g2l[gi];
+      if (g2l[gi] < 0) missing.store(gi, std::memory_order_relaxed);
+    }
+  });
+  if (missing >= 0) local(missing);
   m.materials = g.materials;
   m.bodies = g.bodies;
   m.n_free_vertices = L.n_owned;
@@ -222,36 +226,41 @@ LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLa
   c.pair_E = gc.pair_E;
   c.dt_limit = gc.dt_limit;
 
-  // Primitives with every vertex local, in global order (free bodies first).
-  std::vector<std::int32_t> prims;
-  for (std::int64_t i = 0; i < nv; ++i) {
-    const std::int64_t gi = L.vertices[i];
-    prims.insert(prims.end(), ix.vp.begin() + ix.vp_off[gi], ix.vp.begin() + ix.vp_off[gi + 1]);
-  }
-  std::sort(prims.begin(), prims.end());
-  prims.erase(std::unique(prims.begin(), prims.end()), prims.end());
-  std::erase_if(prims, [&](std::int32_t p) {
-    for (int k = 0; k < 4; ++k)
-      if (gc.prim_v[p][k] >= 0 && g2l[gc.prim_v[p][k]] < 0) return true;
-    return false;
+  // Primitives with every vertex local, in global order (free bodies first): each global
+  // primitive tested in parallel, the kept ones collected in order.
+  const std::int64_t ngp = static_cast<std::int64_t>(gc.prim_v.size());
+  std::vector<std::uint8_t> keep(ngp);
+  for_each(HostExec{}, ngp, [&](std::int64_t p) {
+    bool all = true;
+    for (int k = 0; k < 4; ++k) all = all && (gc.prim_v[p][k] < 0 || g2l[gc.prim_v[p][k]] >= 0);
+    keep[p] = all;
   });
-  // Their triangles and the triangles' edges, in global order.
+  std::vector<std::int32_t> prims;
+  for (std::int64_t p = 0; p < ngp; ++p)
+    if (keep[p]) prims.push_back(static_cast<std::int32_t>(p));
+  // Their triangles and the triangles' edges, in global order (marked, then collected), and
+  // global -> local numbers (-1: not held).
+  auto collect = [](std::vector<std::int32_t>& marks, std::vector<std::int64_t>& out) {
+    for (std::size_t e = 0; e < marks.size(); ++e) {
+      if (!marks[e]) {
+        marks[e] = -1;
+        continue;
+      }
+      marks[e] = static_cast<std::int32_t>(out.size());
+      out.push_back(static_cast<std::int64_t>(e));
+    }
+  };
   std::vector<std::int64_t>& tris = out.ids.triangle;
+  std::vector<std::int32_t> tri_l(gc.tri_v.size(), 0);
   for (std::int32_t p : prims)
     for (std::int64_t q = gc.prim_tri_off[p]; q < gc.prim_tri_off[p + 1]; ++q)
-      tris.push_back(gc.prim_tri[q]);
-  std::sort(tris.begin(), tris.end());
-  tris.erase(std::unique(tris.begin(), tris.end()), tris.end());
+      tri_l[gc.prim_tri[q]] = 1;
+  collect(tri_l, tris);
   std::vector<std::int64_t>& edges = out.ids.edge;
+  std::vector<std::int32_t> edge_l(gc.edges.size(), 0);
   for (std::int64_t s : tris)
-    for (int q = 0; q < 3; ++q) edges.push_back(ix.tri_edges[s][q]);
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-
-  auto local_tri = [&](std::int64_t s) { return static_cast<std::int32_t>(find_sorted(tris, s)); };
-  auto local_edge = [&](std::int64_t e) {
-    return static_cast<std::int32_t>(find_sorted(edges, e));
-  };
+    for (int q = 0; q < 3; ++q) edge_l[ix.tri_edges[s][q]] = 1;
+  collect(edge_l, edges);
   c.own_v_off.push_back(0);
   c.own_e_off.push_back(0);
   for (std::int64_t s : tris) {
@@ -260,7 +269,7 @@ LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLa
     for (std::int64_t q = gc.own_v_off[s]; q < gc.own_v_off[s + 1]; ++q)
       c.own_v.push_back(local(gc.own_v[q]));
     for (std::int64_t q = gc.own_e_off[s]; q < gc.own_e_off[s + 1]; ++q)
-      c.own_e.push_back(local_edge(gc.own_e[q]));
+      c.own_e.push_back(edge_l[gc.own_e[q]]);
     c.own_v_off.push_back(static_cast<std::int64_t>(c.own_v.size()));
     c.own_e_off.push_back(static_cast<std::int64_t>(c.own_e.size()));
   }
@@ -269,7 +278,7 @@ LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLa
     c.edges.push_back({local(gc.edges[e][0]), local(gc.edges[e][1])});
     std::array<std::int32_t, 2> et{-1, -1};
     for (int k = 0; k < 2; ++k)
-      if (gc.edge_tri[e][k] >= 0) et[k] = local_tri(gc.edge_tri[e][k]);
+      if (gc.edge_tri[e][k] >= 0) et[k] = tri_l[gc.edge_tri[e][k]];
     c.edge_tri.push_back(et);
   }
   c.prim_tri_off.push_back(0);
@@ -280,7 +289,7 @@ LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLa
     c.prim_v.push_back(pv);
     c.prim_body.push_back(gc.prim_body[p]);
     for (std::int64_t q = gc.prim_tri_off[p]; q < gc.prim_tri_off[p + 1]; ++q)
-      c.prim_tri.push_back(local_tri(gc.prim_tri[q]));
+      c.prim_tri.push_back(tri_l[gc.prim_tri[q]]);
     c.prim_tri_off.push_back(static_cast<std::int64_t>(c.prim_tri.size()));
     if (!gc.body_fixed[gc.prim_body[p]])
       c.n_free_prims = static_cast<std::int64_t>(c.prim_v.size());

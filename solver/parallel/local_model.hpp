@@ -34,8 +34,6 @@ struct ModelIndex {
   std::vector<std::int64_t> vt_off;  // vertex -> free tets containing it (CSR)
   std::vector<std::int32_t> vt;
   std::vector<std::int32_t> tets_at;  // free tets whose smallest vertex id is this vertex
-  std::vector<std::int64_t> vp_off;   // vertex -> contact primitives containing it (CSR)
-  std::vector<std::int32_t> vp;
   std::vector<std::array<std::int32_t, 3>> tri_edges;  // surface triangle -> its edges
   std::vector<std::uint8_t> contact_vertex;            // a vertex of some contact primitive
   std::vector<std::uint8_t> wall_vertex;               // tested against walls
