@@ -39,7 +39,8 @@ int main(int argc, char** argv) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   if (size != 2 || cudaGetDeviceCount(&ngpu) != cudaSuccess || ngpu < 2) {
-    if (rank == 0) std::printf("{\"probe\": \"device_comm\", \"error\": \"needs 2 ranks and 2 GPUs\"}\n");
+    if (rank == 0)
+      std::printf("{\"probe\": \"device_comm\", \"error\": \"needs 2 ranks and 2 GPUs\"}\n");
     MPI_Finalize();
     return 0;
   }
@@ -51,7 +52,8 @@ int main(int argc, char** argv) {
   cudaMemset(buf, rank + 1, kMax);
   cudaDeviceSynchronize();
   const bool aware = cuda_aware();
-  if (rank == 0) std::printf("{\"probe\": \"device_comm\", \"mpi_cuda_aware\": %s", aware ? "true" : "false");
+  if (rank == 0)
+    std::printf("{\"probe\": \"device_comm\", \"mpi_cuda_aware\": %s", aware ? "true" : "false");
   if (aware) {
     if (rank == 0) std::printf(", \"mpi_device_pingpong\": [");
     for (size_t s = 0; s < sizeof kSizes / sizeof kSizes[0]; ++s) {
@@ -70,8 +72,8 @@ int main(int argc, char** argv) {
       }
       const double one_way = (MPI_Wtime() - t0) / (2.0 * it);
       if (rank == 0)
-        std::printf("%s{\"bytes\": %zu, \"one_way_s\": %.4e, \"bandwidth_Bps\": %.4e}", s ? ", " : "",
-                    n, one_way, n / one_way);
+        std::printf("%s{\"bytes\": %zu, \"one_way_s\": %.4e, \"bandwidth_Bps\": %.4e}",
+                    s ? ", " : "", n, one_way, n / one_way);
     }
     if (rank == 0) std::printf("]");
   }
@@ -80,8 +82,9 @@ int main(int argc, char** argv) {
   if (rank == 1) cudaIpcGetMemHandle(&h, buf);
   MPI_Bcast(&h, sizeof h, MPI_BYTE, 1, MPI_COMM_WORLD);
   char* peer = nullptr;
-  const bool mapped = rank == 1 || cudaIpcOpenMemHandle(reinterpret_cast<void**>(&peer), h,
-                                                        cudaIpcMemLazyEnablePeerAccess) == cudaSuccess;
+  const bool mapped =
+      rank == 1 || cudaIpcOpenMemHandle(reinterpret_cast<void**>(&peer), h,
+                                        cudaIpcMemLazyEnablePeerAccess) == cudaSuccess;
   int ok = mapped ? 1 : 0, all = 0;
   MPI_Allreduce(&ok, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
   if (rank == 0) std::printf(", \"ipc_mapped\": %s", all ? "true" : "false");
@@ -110,8 +113,9 @@ int main(int argc, char** argv) {
           MPI_Send(&c, 1, MPI_BYTE, 1, 3, MPI_COMM_WORLD);  // done
         }
         handshake = (MPI_Wtime() - t0) / it;
-        std::printf("%s{\"bytes\": %zu, \"copy_s\": %.4e, \"copy_Bps\": %.4e, \"with_handshake_s\": %.4e}",
-                    s ? ", " : "", n, copy, n / copy, handshake);
+        std::printf(
+            "%s{\"bytes\": %zu, \"copy_s\": %.4e, \"copy_Bps\": %.4e, \"with_handshake_s\": %.4e}",
+            s ? ", " : "", n, copy, n / copy, handshake);
       } else {
         for (int i = 0; i < it; ++i) {
           char c = 0;

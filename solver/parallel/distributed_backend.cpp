@@ -353,9 +353,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     for (const auto& [k, v] : timers_.seconds())
       if (k.find('.') != std::string::npos) mine[k] = v;
     static constexpr const char* keys[] = {
-        "contact.broad",    "contact.narrow",   "contact.force",   "halo.skin",
-        "halo.xv",          "halo.shares",      "elements.shares", "migration.export",
-        "migration.state",  "migration.layout", "migration.upload"};
+        "contact.broad",   "contact.narrow",   "contact.force",   "halo.skin",
+        "halo.xv",         "halo.shares",      "elements.shares", "migration.export",
+        "migration.state", "migration.layout", "migration.upload"};
     constexpr int n = std::size(keys);
     double v[n], mx[n];
     for (int k = 0; k < n; ++k) {
@@ -1282,7 +1282,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   std::unique_ptr<HaloPlan> halo_;
   bool contact_ = false, preload_ = false, relaxing_ = false;
   double band_ = 1, slack_ = 0;
-  double reach_ = 0, slack0_ = 0;           // diam + D_DEM; the first slack (set_slack)
+  double reach_ = 0, slack0_ = 0;          // diam + D_DEM; the first slack (set_slack)
   double rebuild_s_ = 0, rebuilt_at_ = 0;  // the last rebuild's seconds, its end (MPI_Wtime)
   std::unordered_map<std::uint64_t, std::vector<std::int64_t>> fixed_cells_;
   std::int64_t n_contact_owned_ = 0;

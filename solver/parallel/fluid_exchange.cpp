@@ -253,9 +253,8 @@ class MpiFluidExchange final : public FluidExchange {
         for (std::uint32_t z = lo[2] / s; z <= hi[2] / s; ++z) {
           // Neighbouring band cells test the same tree cells: each one's answer is kept
           // (g_.in_piece; s < 2^16 and coordinates < 2^16 name it).
-          const std::int64_t m = g_.in_piece.insert(std::uint64_t{s} << 48 |
-                                                    std::uint64_t{x} << 32 |
-                                                    std::uint64_t{y} << 16 | z);
+          const std::int64_t m = g_.in_piece.insert(
+              std::uint64_t{s} << 48 | std::uint64_t{x} << 32 | std::uint64_t{y} << 16 | z);
           if (m == static_cast<std::int64_t>(g_.in_piece_value.size())) {
             const std::uint64_t k = sfc_key(g.curve, x * s, y * s, z * s, g.order);
             const std::uint64_t seg = k - k % span;
@@ -324,10 +323,10 @@ class MpiFluidExchange final : public FluidExchange {
   long every_ = 0;
   double threshold_ = 0, max_cell_ = 0;
   double support_, z0_, period_;  // the kernel support; the band grid's z origin and period
-  double skin_ = 0;         // the ghost band's margin beyond the kernel support (widen_skin)
-  BandGrid band_;           // band cells: half of support + skin wide, wrapping a periodic z
-  long steps_ = 0;          // keep() calls
-  bool rebalance_ = false;  // the next distribute() cuts the partition again
+  double skin_ = 0;               // the ghost band's margin beyond the kernel support (widen_skin)
+  BandGrid band_;                 // band cells: half of support + skin wide, wrapping a periodic z
+  long steps_ = 0;                // keep() calls
+  bool rebalance_ = false;        // the next distribute() cuts the partition again
   // Wall times the re-cut decision weighs (time_step): steps since the last measurement, and
   // the longest layout rebuild so far (the exchange's part, then the whole interval).
   double last_keep_ = 0, window_s_ = 0, since_s_ = 0, rebuild_s_ = 0;

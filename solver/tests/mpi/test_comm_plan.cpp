@@ -10,10 +10,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <memory>
 #include <random>
-#include <cstring>
 #include <set>
 
 #include "core/memory.hpp"
