@@ -17,6 +17,7 @@
 #include "parallel/comm_plan.hpp"
 #include "parallel/distributed_backend_mpi.hpp"
 #include "parallel/local_model.hpp"
+#include "parallel/rebuild_policy.hpp"
 
 namespace qdemsph {
 
@@ -830,16 +831,13 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       if (ix_.contact_vertex[i]) fixed_cells_[cell_key(m.X[i])].push_back(i);
   }
 
-  // Before a rebuild the motion asked for: when the last rebuild took more than kRebuildShare
-  // of the stepping time since it (the largest over ranks), the next layout gets twice the
-  // slack, up to kMaxSlack x the first: rebuilds a GPU rank pays ~0.1 s for (a model's upload)
-  // become rarer for a wider ghost band. The same decision on every rank.
+  // Before a rebuild the motion asked for: the slack of the next layout (widened_margin, from
+  // the largest rebuild and stepping times over the ranks).
   void adapt_slack() {
-    static constexpr double kRebuildShare = 0.1, kMaxSlack = 4;
     double t[2] = {rebuild_s_, MPI_Wtime() - rebuilt_at_};
     MPI_Allreduce(MPI_IN_PLACE, t, 2, MPI_DOUBLE, MPI_MAX, comm_);
-    if (t[0] > kRebuildShare * t[1] && slack_ < kMaxSlack * slack0_)
-      set_slack(std::min(2 * slack_, kMaxSlack * slack0_));
+    const double slack = widened_margin(slack_, kMaxMarginGrowth * slack0_, t[0], t[1]);
+    if (slack != slack_) set_slack(slack);
   }
 
   double seconds(const char* phase) const {

@@ -299,19 +299,15 @@ class MpiFluidExchange final : public FluidExchange {
     last_keep_ = now;
   }
 
-  // Before a rebuild the motion asked for: when a rebuild costs more than kRebuildShare of the
-  // stepping time since the last one (the largest over ranks), the next layout gets twice the
-  // skin, up to kMaxSkin x kFluidSkin: a wider ghost band (more ghosts to refresh), rebuilt
-  // rarer (a GPU rank's rebuild of 1.1 M particles takes ~0.7 s on the host). The same
-  // decision on every rank.
+  // Before a rebuild the motion asked for: the skin of the next layout (widened_margin, from
+  // the largest rebuild and stepping times over the ranks).
   void widen_skin() {
-    static constexpr double kRebuildShare = 0.1, kMaxSkin = 4;
     double t[2] = {rebuild_s_, since_s_};
     MPI_Allreduce(MPI_IN_PLACE, t, 2, MPI_DOUBLE, MPI_MAX, comm_);
     since_s_ = 0;
-    const double most = kMaxSkin * kFluidSkin * support_;
-    if (t[0] > kRebuildShare * t[1] && skin_ < most) {
-      skin_ = std::min(2 * skin_, most);
+    const double skin = widened_margin(skin_, kMaxMarginGrowth * kFluidSkin * support_, t[0], t[1]);
+    if (skin != skin_) {
+      skin_ = skin;
       band_ = BandGrid((support_ + skin_) / 2, z0_, period_);
     }
   }

@@ -18,6 +18,7 @@
 #include <memory>
 
 #include "parallel/distributed_backend.hpp"
+#include "parallel/rebuild_policy.hpp"
 #include "sph/fluid_exchange.hpp"
 #include "sph/fluid_setup.hpp"
 
@@ -35,15 +36,6 @@ inline constexpr double kFluidWallCost = 0.25;
 // (dt = 0.25 h / (c + v), c >= 10 v) a particle moves < 0.023 h per step, skin / 2 = h / 4;
 // the 3,280-particle test dam break (test_distributed_fluid.cpp) rebuilds after 37-133 steps.
 inline constexpr double kFluidSkin = 0.25;
-
-// Whether cutting the fluid's partition again pays: the slowest rank's share above the mean,
-// `excess` = 1 - mean / max of the owned cost, of each step of `step_s` seconds over the
-// `every` steps until the next measurement saves more than a layout rebuild costs
-// (`rebuild_s`: migration, band cells, ghost plan, the stage's copies; on a GPU rank with
-// 1.1 M particles a rebuild is worth hundreds of steps).
-inline bool recut_pays(double excess, double step_s, long every, double rebuild_s) {
-  return excess * step_s * static_cast<double>(every) > rebuild_s;
-}
 
 // For the stage of `fluid`, whose arrays live in `space`: the ghost band is its kernel
 // support 2h x (1 + kFluidSkin) wide, and wraps its periodic z (fluid.periodic_z).

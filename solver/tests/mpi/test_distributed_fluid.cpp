@@ -128,6 +128,16 @@ TEST(DistributedFluid, RecutPaysOnlyWhenTheSavingExceedsTheRebuild) {
   EXPECT_TRUE(recut_pays(excess, 4.2e-3, 1000, 0.3));
 }
 
+// A margin doubles, up to its bound, when the last rebuild took more than a tenth of the
+// stepping since the one before: 0.5 s against 200 steps of 4 ms (0.8 s) widens, against 1,500
+// steps (6 s) it does not.
+TEST(DistributedFluid, MarginsWidenWhenRebuildsAreDear) {
+  EXPECT_DOUBLE_EQ(widened_margin(1.0, 4.0, 0.5, 0.8), 2.0);
+  EXPECT_DOUBLE_EQ(widened_margin(1.0, 4.0, 0.5, 6.0), 1.0);
+  EXPECT_DOUBLE_EQ(widened_margin(3.0, 4.0, 0.5, 0.8), 4.0);
+  EXPECT_DOUBLE_EQ(widened_margin(4.0, 4.0, 0.5, 0.8), 4.0);
+}
+
 TEST(DistributedFluid, DamBreakEqualsOneRankBitForBit) {
   const FluidSetup f = dam_setup();
   const bool root = rank_of() == 0;

@@ -1,0 +1,29 @@
+// When a distributed layout's upkeep pays (docs/parallel.md items 4 and 8): a rank's ghost or
+// layout rebuild runs on the host (on a GPU rank ~0.5 s for 786 k tets, ~0.65 s for 1.1 M SPH
+// particles, against millisecond steps), so the margins that decide how often one happens, and
+// whether a re-cut is worth one, weigh the measured rebuild time. Pure functions, no MPI: the
+// callers pass values that are the same on every rank (reduced), so every rank decides alike.
+#pragma once
+
+#include <algorithm>
+
+namespace qdemsph {
+
+// The margin (the bodies' contact slack, the fluid's ghost skin) for the next layout: twice the
+// current one, up to `most`, when the last rebuild took more than a tenth of the stepping time
+// since the one before (`stepping_s`); a wider band holds more ghosts and is rebuilt rarer.
+inline double widened_margin(double margin, double most, double rebuild_s, double stepping_s) {
+  constexpr double kRebuildShare = 0.1;
+  return rebuild_s > kRebuildShare * stepping_s ? std::min(2 * margin, most) : margin;
+}
+// Margins widen at most this factor over their first value.
+inline constexpr double kMaxMarginGrowth = 4;
+
+// Whether cutting a partition again pays: the slowest rank's share above the mean, `excess`
+// = 1 - mean / max of the owned cost, of each step of `step_s` seconds over the `every` steps
+// until the next measurement saves more than a layout rebuild costs (`rebuild_s`).
+inline bool recut_pays(double excess, double step_s, long every, double rebuild_s) {
+  return excess * step_s * static_cast<double>(every) > rebuild_s;
+}
+
+}  // namespace qdemsph
