@@ -32,6 +32,12 @@ ParallelOptions parallel_options(const ParallelSpec& spec) {
 
 namespace {
 
+// A phase's seconds in a timer map (0 when it never ran).
+double seconds_of(const std::map<std::string, double>& m, const char* phase) {
+  const auto it = m.find(phase);
+  return it == m.end() ? 0.0 : it->second;
+}
+
 // Every rank's slice on rank 0, concatenated in rank order, the contact dissipation summed
 // (other ranks: empty).
 StateSlice gather_slices(MPI_Comm comm, const StateSlice& s) {
@@ -526,10 +532,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     r.imbalance_initial = imbalance_initial_;
     r.rebalance_log = log_;
     const auto& t = timers_.seconds();
-    auto sec = [](const std::map<std::string, double>& m, const char* k) {
-      const auto it = m.find(k);
-      return it == m.end() ? 0.0 : it->second;
-    };
+    const auto sec = seconds_of;
     const double contact = local_contact_seconds();
     // The fluid's ghost refreshes and layout rebuilds count as halo and migration, like the
     // bodies', and its first layout as set-up (sph_stage.hpp: sub-phases sph.halo,
@@ -840,21 +843,13 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     if (slack != slack_) set_slack(slack);
   }
 
-  double seconds(const char* phase) const {
-    const auto it = timers_.seconds().find(phase);
-    return it == timers_.seconds().end() ? 0.0 : it->second;
-  }
+  double seconds(const char* phase) const { return seconds_of(timers_.seconds(), phase); }
 
   // Busy time of each rank since the last window: the imbalance, and the time per item that
   // weights the cost of the next partition.
   double measure_window() {
-    const auto& t = timers_.seconds();
-    auto sec = [&](const char* k) {
-      const auto it = t.find(k);
-      return it == t.end() ? 0.0 : it->second;
-    };
     const double contact = local_contact_seconds();
-    const double te = sec("elements") - contact, ti = sec("integration");
+    const double te = seconds("elements") - contact, ti = seconds("integration");
     const double busy = te + ti + contact;
     double w[7] = {busy - mark_[0],
                    te - mark_[1],

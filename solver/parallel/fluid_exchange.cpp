@@ -105,6 +105,7 @@ class MpiFluidExchange final : public FluidExchange {
     after_keep_ = true;
     return false;
   }
+  bool wants_load() const override { return every_ > 0 && (steps_ + 1) % every_ == 0; }
   double skin() const override { return skin_; }
 
   const std::vector<std::int64_t>& send_slots() const override {

@@ -67,6 +67,8 @@ class FluidExchange {
   // over the ranks exceeds skin() / 2, or the partition is due to be cut again; call
   // distribute()). The same answer on every rank. Collective.
   virtual bool keep(double moved, double load) = 0;
+  // Whether the next keep() reads `load` (a measurement is due); otherwise 0 will do.
+  virtual bool wants_load() const = 0;
   // The ghost band's margin beyond the kernel support.
   virtual double skin() const = 0;
   // Owned values -> ghost slots of the layout distribute() returned, in records the caller

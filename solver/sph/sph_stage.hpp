@@ -166,7 +166,7 @@ class SphStage final : public FluidStage {
         exec_sync(Exec{});  // the work before is the step's (timers_ below)
         auto s = timers_.scope("sph.halo");
         auto s1 = timers_.scope("sph.halo.skin");
-        keep = laid_out_ && ex_->keep(moved(), owned_cost());
+        keep = laid_out_ && ex_->keep(moved(), ex_->wants_load() ? owned_cost() : 0.0);
       }
       if (keep) {
         refresh_positions();
