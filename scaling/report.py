@@ -66,12 +66,14 @@ def machine_label(r) -> str:
 
 
 def series(recs):
-    """{(sweep, backend, variant, host label): [records sorted by ranks]} of ok runs."""
+    """{(sweep, backend, variant, host label, overridden preset values): [records sorted by
+    ranks]} of ok runs."""
     out = defaultdict(dict)
     for r in recs:
         if r.get("status") != "ok" or not r.get("step_s"):
             continue
-        k = (r["sweep"], r["backend"], r.get("variant") or "", machine_label(r))
+        k = (r["sweep"], r["backend"], r.get("variant") or "", machine_label(r),
+             " ".join(f"{p}={v}" for p, v in sorted((r.get("params") or {}).items())))
         prev = out[k].get(r["ranks"])
         if prev is None or r["date"] > prev["date"]:  # the newest run per rank count
             out[k][r["ranks"]] = r
@@ -130,22 +132,23 @@ def plots(recs):
         plt = None
     figs, md = [], []
     ser = series(recs)
-    for (sweep, backend, variant, mach), rs in sorted(ser.items()):
+    for (sweep, backend, variant, mach, params), rs in sorted(ser.items()):
         if variant == "copies":  # the node baseline: columns of its weak series (below)
             continue
         mode = rs[0]["mode"]
         rows = efficiencies(rs, mode)
         # Node factor and the decomposition's own efficiency from N independent copies of the
         # 1-rank run on the same machine (run.py --launcher copies).
-        cop = {r["ranks"]: r["step_s"] for r in ser.get((sweep, backend, "copies", mach), [])}
+        cop = {r["ranks"]: r["step_s"] for r in ser.get((sweep, backend, "copies", mach, params), [])}
         t1 = next((r["step_s"] for r in rs if r["ranks"] == 1), None)
         for row in rows:
             if row["ranks"] in cop and t1:
                 row["node"] = t1 / cop[row["ranks"]]
                 row["decomp"] = cop[row["ranks"]] / row["step_s"]
         ranks = [r["ranks"] for r in rs]
-        tag = f"{sweep}_{backend}" + (f"_{variant}" if variant else "")
-        md.append(f"\n### {sweep} ({mode}, {backend}{', ' + variant if variant else ''}) on {mach}\n")
+        tag = f"{sweep}_{backend}" + (f"_{variant}" if variant else "") + "".join(f"_{q}" for q in params.split())
+        label = f"{backend}{', ' + variant if variant else ''}{', ' + params if params else ''}"
+        md.append(f"\n### {sweep} ({mode}, {label}) on {mach}\n")
         if cop:
             md.append("E vs 1 = node x decomposition: *node* = t(1) / t(N copies of the 1-rank run at once, "
                       "one per core), *decomposition* = t(N copies) / t(N ranks).\n")
@@ -160,7 +163,9 @@ def plots(recs):
                       f"{f(row.get('node'))} | {f(row.get('decomp'))} | "
                       f"{f(row['imbalance'])} | {mb(row['halo_bytes_per_step'])} | "
                       f"{mb(row.get('fluid_halo_bytes_per_step'))} |")
-        pred = model_line(rs, sweep, backend, ranks) if mode == "weak" and not variant and len(rs) > 1 else None
+        # The model's geometry files are of the presets' sizes.
+        pred = (model_line(rs, sweep, backend, ranks) if mode == "weak" and not variant and not params and len(rs) > 1
+                else None)
         if pred:
             md.append(f"\nModel PREDICTION for these runs (costs from the 1-rank record, network {pred[1]}): "
                       + ", ".join(f"N={p['ranks']}: E={p.get('efficiency_vs_1', float('nan')):.3f}" for p in pred[0]))
@@ -195,7 +200,7 @@ def plots(recs):
         for a in ax:
             a.grid(alpha=0.3)
             a.legend(fontsize=8)
-        fig.suptitle(f"{sweep} ({mode}, {backend}{', ' + variant if variant else ''}): {mach}, {rs[-1]['date'][:10]}", fontsize=10)
+        fig.suptitle(f"{sweep} ({mode}, {label}): {mach}, {rs[-1]['date'][:10]}", fontsize=10)
         fig.tight_layout()
         figs.append((f"{mode}_{tag}", f"{sweep} {mode} efficiency", _fig_png(fig)))
         plt.close(fig)
@@ -210,7 +215,7 @@ def plots(recs):
             bottom = [b + x for b, x in zip(bottom, v)]
         ax.set_xlabel("ranks")
         ax.set_ylabel("ms per step (mean over ranks)")
-        ax.set_title(f"{sweep} ({backend}{', ' + variant if variant else ''}) phases: {mach}", fontsize=10)
+        ax.set_title(f"{sweep} ({label}) phases: {mach}", fontsize=10)
         ax.legend(fontsize=8)
         ax.grid(alpha=0.3, axis="y")
         fig.tight_layout()
@@ -218,8 +223,8 @@ def plots(recs):
         plt.close(fig)
     # balancer on vs off
     bal = defaultdict(dict)
-    for (sweep, backend, variant, mach), rs in ser.items():
-        if variant:
+    for (sweep, backend, variant, mach, params), rs in ser.items():
+        if variant and not params:
             bal[(sweep, backend, mach)][variant] = {r["ranks"]: r for r in rs}
     for (sweep, backend, mach), vs in sorted(bal.items()):
         if not {"balanced", "static"} <= set(vs):

@@ -203,8 +203,9 @@ SWEEPS = {
 }
 
 
-def scene_for(sweep: str, ranks: int, backend: str = "cpu", variant: str | None = None):
-    """(scene dict, meta) of `sweep` at `ranks` ranks with the `backend` size preset. meta:
+def scene_for(sweep: str, ranks: int, backend: str = "cpu", variant: str | None = None, params: dict | None = None):
+    """(scene dict, meta) of `sweep` at `ranks` ranks with the `backend` size preset, whose
+    values `params` may override (e.g. {"cubes_per_rank": 864}: another size per rank). meta:
     sizes (n_tets, n_vertices, n_particles, bodies, items), layout, steps or end_time."""
     if sweep not in SWEEPS:
         raise KeyError(f"unknown sweep '{sweep}' (known: {', '.join(SWEEPS)})")
@@ -212,6 +213,11 @@ def scene_for(sweep: str, ranks: int, backend: str = "cpu", variant: str | None 
     if backend not in sw["presets"]:
         raise KeyError(f"sweep '{sweep}' has no '{backend}' preset")
     p = sw["presets"][backend]
+    unknown = sorted(set(params or {}) - set(p))
+    if unknown:
+        raise KeyError(f"sweep '{sweep}' ({backend} preset) has no parameter {', '.join(unknown)} "
+                       f"(known: {', '.join(p)})")
+    p = {**p, **(params or {})}
     weak = sw["mode"] == "weak"
     if sw["case"] == "cubes":
         cubes = p["cubes_per_rank"] * ranks if weak else p["cubes"]
@@ -239,7 +245,7 @@ def scene_for(sweep: str, ranks: int, backend: str = "cpu", variant: str | None 
     scene["name"] = f"{sweep}_n{ranks}" + (f"_{variant}" if variant else "")
     meta.update({"sweep": sweep, "case": sw["case"], "mode": sw["mode"], "ranks": ranks, "preset": backend,
                  "preset_params": p, "variant": variant, "items": meta["n_vertices"] + meta["n_particles"],
-                 "steps": p.get("steps"), "end_time": p.get("end_time")})
+                 "steps": p.get("steps"), "end_time": p.get("end_time"), "params": dict(params or {})})
     return scene, meta
 
 

@@ -59,3 +59,21 @@ def test_strong_efficiency():
 def test_fluid_halo_bytes_reach_the_table_rows():
     rows = report.efficiencies([{**rec(2, 1.0), "fluid_halo_bytes_per_step": 2.5e6}, rec(4, 1.1)], "weak")
     assert rows[0]["fluid_halo_bytes_per_step"] == 2.5e6 and rows[1]["fluid_halo_bytes_per_step"] is None
+
+
+def test_preset_values_can_be_overridden_and_keep_their_own_series():
+    import scenes
+
+    assert run.parse_params(["cubes_per_rank=864", "cells=8"]) == {"cubes_per_rank": 864, "cells": 8}
+    assert run.params_tag({"cubes_per_rank": 864}) == "_cubes_per_rank-864" and run.params_tag({}) == ""
+    with pytest.raises(SystemExit):
+        run.parse_params(["cubes_per_rank"])
+    big = scenes.scene_for("cubes-weak", 1, "cpu", params={"cubes_per_rank": 54})[1]
+    assert big["n_tets"] == 2 * scenes.scene_for("cubes-weak", 1, "cpu")[1]["n_tets"]
+    assert big["params"] == {"cubes_per_rank": 54} and big["preset_params"]["cubes_per_rank"] == 54
+    with pytest.raises(KeyError, match="no parameter bogus"):
+        scenes.scene_for("cubes-weak", 1, "cpu", params={"bogus": 1})
+    base = {"status": "ok", "step_s": 1.0, "sweep": "cubes-weak", "backend": "cuda", "ranks": 1, "date": "x",
+            "machine": {}}
+    ser = report.series([base, dict(base, params={"cubes_per_rank": 864})])
+    assert len(ser) == 2 and any(k[4] == "cubes_per_rank=864" for k in ser)
