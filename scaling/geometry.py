@@ -428,6 +428,8 @@ def main(argv=None):
     ap.add_argument("--json", help="write the per-rank-count summaries here")
     ap.add_argument("--validate", nargs="+", help="run.py records of distributed runs (and the 1-rank run of the "
                     "sweep, for the contact pairs): measured vs predicted halo")
+    ap.add_argument("--param", action="append", metavar="KEY=VALUE",
+                    help="with --sweep: override a value of the size preset (run.py --param)")
     a = ap.parse_args(argv)
     if a.validate:
         recs = [json.loads(Path(f).read_text()) for f in a.validate]
@@ -450,7 +452,7 @@ def main(argv=None):
     for n in ranks:
         if a.sweep:
             import scenes
-            scene, meta = scenes.scene_for(a.sweep, n, a.backend)
+            scene, meta = scenes.scene_for(a.sweep, n, a.backend, params=scenes.parse_params(a.param))
             if meta["items"] > a.max_items:
                 print(f"{a.sweep} N={n}: {meta['items']:.3g} items > --max-items, skipped", flush=True)
                 continue

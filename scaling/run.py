@@ -219,23 +219,6 @@ def run_copies(n, cmd, rd, env, limit, cores):
     return "ok", "" if pin else "not pinned (no taskset, or more copies than cores)", worst
 
 
-def parse_params(items) -> dict:
-    """--param KEY=VALUE (repeatable) -> {KEY: number or string}: preset values to override."""
-    out = {}
-    for it in items or []:
-        k, sep, v = it.partition("=")
-        if not sep or not k:
-            raise SystemExit(f"--param {it!r}: expected KEY=VALUE, e.g. cubes_per_rank=864")
-        try:
-            out[k] = int(v)
-        except ValueError:
-            try:
-                out[k] = float(v)
-            except ValueError:
-                out[k] = v
-    return out
-
-
 def params_tag(params: dict) -> str:
     """File-name suffix of a run with overridden preset values ("" for the preset itself)."""
     return "".join(f"_{k}-{v}" for k, v in sorted(params.items()))
@@ -255,8 +238,11 @@ def run_sweep(a) -> list[dict]:
     threads = a.threads or (max(1, cores // max(ranks)) if a.backend == "cuda" else 1)
     # dt: once, from the 1-rank scene (weak: the same local geometry at every N; strong: the
     # same scene), fixed for every run of the sweep.
-    params = parse_params(a.param)
-    s0, m0 = scenes.scene_for(a.sweep, 1, a.backend, params=params)
+    try:
+        params = scenes.parse_params(a.param)
+        s0, m0 = scenes.scene_for(a.sweep, 1, a.backend, params=params)
+    except (ValueError, KeyError) as e:
+        raise SystemExit(f"run.py: {e}") from None
     p0 = work / f"{a.sweep}_{a.backend}_dt.yaml"
     p0.write_text(scenes.dump(s0))
     dt_fixed = scene_dt(qd, p0)

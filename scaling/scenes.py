@@ -203,6 +203,23 @@ SWEEPS = {
 }
 
 
+def parse_params(items) -> dict:
+    """--param KEY=VALUE (repeatable) -> {KEY: number or string}: preset values to override."""
+    out = {}
+    for it in items or []:
+        k, sep, v = it.partition("=")
+        if not sep or not k:
+            raise ValueError(f"--param {it!r}: expected KEY=VALUE, e.g. cubes_per_rank=864")
+        try:
+            out[k] = int(v)
+        except ValueError:
+            try:
+                out[k] = float(v)
+            except ValueError:
+                out[k] = v
+    return out
+
+
 def scene_for(sweep: str, ranks: int, backend: str = "cpu", variant: str | None = None, params: dict | None = None):
     """(scene dict, meta) of `sweep` at `ranks` ranks with the `backend` size preset, whose
     values `params` may override (e.g. {"cubes_per_rank": 864}: another size per rank). meta:

@@ -64,10 +64,10 @@ def test_fluid_halo_bytes_reach_the_table_rows():
 def test_preset_values_can_be_overridden_and_keep_their_own_series():
     import scenes
 
-    assert run.parse_params(["cubes_per_rank=864", "cells=8"]) == {"cubes_per_rank": 864, "cells": 8}
+    assert scenes.parse_params(["cubes_per_rank=864", "cells=8"]) == {"cubes_per_rank": 864, "cells": 8}
     assert run.params_tag({"cubes_per_rank": 864}) == "_cubes_per_rank-864" and run.params_tag({}) == ""
-    with pytest.raises(SystemExit):
-        run.parse_params(["cubes_per_rank"])
+    with pytest.raises(ValueError):
+        scenes.parse_params(["cubes_per_rank"])
     big = scenes.scene_for("cubes-weak", 1, "cpu", params={"cubes_per_rank": 54})[1]
     assert big["n_tets"] == 2 * scenes.scene_for("cubes-weak", 1, "cpu")[1]["n_tets"]
     assert big["params"] == {"cubes_per_rank": 54} and big["preset_params"]["cubes_per_rank"] == 54

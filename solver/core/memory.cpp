@@ -23,6 +23,8 @@ void cuda_index_copy(void*, const void*, const std::int64_t*, std::int64_t, std:
 }
 bool cuda_available() { return false; }
 void cuda_sync() {}
+void cuda_copy_async(void*, const void*, std::size_t) { no_cuda(); }
+void cuda_copy_wait() {}
 CudaIpcHandle cuda_ipc_handle(void*) { no_cuda(); }
 void* cuda_ipc_open(const CudaIpcHandle&) { no_cuda(); }
 void cuda_ipc_close(void*) noexcept {}

@@ -36,6 +36,11 @@ void cuda_prefer_device(int index);
 int cuda_device_for(int index, int devices);  // index mod devices (0 without devices)
 // Waits for this process's device work (cudaDeviceSynchronize; nothing without CUDA).
 void cuda_sync();
+// Device-to-device copies (from another GPU of the node too) on this process's copy stream,
+// which does not wait for the kernels (they run in order on the default stream): a halo's
+// peer copies overlap the interior work. cuda_copy_wait returns when those copies are done.
+void cuda_copy_async(void* dst, const void* src, std::size_t bytes);
+void cuda_copy_wait();
 // CUDA IPC between processes of one node: the handle of a device allocation of this process
 // (a pointer cuda_alloc returned), and another process's allocation mapped into this one by
 // its handle (a device pointer here; peer copies from it go over NVLink where there is one).

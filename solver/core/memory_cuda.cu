@@ -120,6 +120,28 @@ void cuda_copy(void* dst, Space, const void* src, Space, std::size_t bytes) {
 
 void cuda_sync() { QDEMSPH_CUDA_CHECK(cudaDeviceSynchronize(), "cudaDeviceSynchronize"); }
 
+namespace {
+cudaStream_t copy_stream() {
+  static const cudaStream_t s = [] {
+    use_preferred_device();
+    cudaStream_t t = nullptr;
+    QDEMSPH_CUDA_CHECK(cudaStreamCreateWithFlags(&t, cudaStreamNonBlocking),
+                       "cudaStreamCreateWithFlags");
+    return t;
+  }();
+  return s;
+}
+}  // namespace
+
+void cuda_copy_async(void* dst, const void* src, std::size_t bytes) {
+  QDEMSPH_CUDA_CHECK(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDefault, copy_stream()),
+                     "cudaMemcpyAsync");
+}
+
+void cuda_copy_wait() {
+  QDEMSPH_CUDA_CHECK(cudaStreamSynchronize(copy_stream()), "cudaStreamSynchronize");
+}
+
 static_assert(sizeof(cudaIpcMemHandle_t) == sizeof(CudaIpcHandle));
 
 CudaIpcHandle cuda_ipc_handle(void* p) {

@@ -1,6 +1,8 @@
 // Named wall-clock accumulators for the phases of a run (elements, integration, output,
 // contact.broad, ...). A Scope stops its timer on destruction; pass a sync function so device
-// work is included.
+// work is included. A launch() scope does not synchronise: it times the host's kernel launches
+// only, and its device work counts in the next synchronised scope (for work that should overlap
+// what follows, e.g. the interior tets with the halo exchange).
 //
 // NVTX: in a CUDA build every Scope is also an NVTX range of the same name (nvtx3, header-only,
 // from the CUDA toolkit), so `nsys profile qdemsph run ...` shows the phases on its timeline.
@@ -29,12 +31,12 @@ class PhaseTimers {
   explicit PhaseTimers(std::function<void()> sync = {}) : sync_(std::move(sync)) {}
   class Scope {
    public:
-    Scope(PhaseTimers& t, const char* name)
-        : t_(t), name_(name), start_(std::chrono::steady_clock::now()) {
+    Scope(PhaseTimers& t, const char* name, bool sync = true)
+        : t_(t), name_(name), sync_(sync), start_(std::chrono::steady_clock::now()) {
       QDEMSPH_NVTX_PUSH(name);
     }
     ~Scope() {
-      if (t_.sync_) t_.sync_();
+      if (sync_ && t_.sync_) t_.sync_();
       QDEMSPH_NVTX_POP();
       t_.seconds_[name_] +=
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
@@ -43,9 +45,11 @@ class PhaseTimers {
    private:
     PhaseTimers& t_;
     const char* name_;
+    bool sync_;
     std::chrono::steady_clock::time_point start_;
   };
   Scope scope(const char* name) { return Scope(*this, name); }
+  Scope launch(const char* name) { return Scope(*this, name, false); }
   const std::map<std::string, double>& seconds() const { return seconds_; }
   void clear() { seconds_.clear(); }
 

@@ -174,18 +174,19 @@ void CommEngine::post_device() {
 std::span<const std::byte> CommEngine::finish_device() {
   const double t0 = MPI_Wtime();
   MPI_Waitall(static_cast<int>(ready_.size()), ready_.data(), MPI_STATUSES_IGNORE);
+  // On the copy stream: the kernels the caller queued meanwhile (the interior tets) run on.
   std::byte* const recv = drecv_.view().p;
   for (int r : nbrs_) {
     const std::int64_t n = recv_off_[r + 1] - recv_off_[r];
     if (n > 0)
-      space_copy(recv + recv_off_[r] * stride_, Space::Cuda, peer_[r] + peer_off_[r] * stride_,
-                 Space::Cuda, n * stride_);
+      cuda_copy_async(recv + recv_off_[r] * stride_, peer_[r] + peer_off_[r] * stride_,
+                      n * stride_);
   }
   const std::int64_t nself = send_off_[rank_ + 1] - send_off_[rank_];
   if (nself > 0)
-    space_copy(recv + recv_off_[rank_] * stride_, Space::Cuda,
-               dsend_.view().p + send_off_[rank_] * stride_, Space::Cuda, nself * stride_);
-  cuda_sync();
+    cuda_copy_async(recv + recv_off_[rank_] * stride_, dsend_.view().p + send_off_[rank_] * stride_,
+                    nself * stride_);
+  cuda_copy_wait();
   for (int r : nbrs_)
     if (recv_off_[r + 1] > recv_off_[r]) {
       reqs_.emplace_back();

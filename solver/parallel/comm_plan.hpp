@@ -120,9 +120,12 @@ class CommEngine {
   // host memory and MPI, scaling/probes/devicecomm.cu). Two empty messages per neighbour
   // order the copies: "packed" (begin_packed synchronises the device first, so the records
   // are there) and "copied" (finish_packed returns once every receiver has its copy, so the
-  // buffer may be packed again). Collective; true only when every rank asks (`want`), every
-  // neighbour is on this node and QDEMSPH_DEVICE_HALO is not 0; otherwise records are staged
-  // through host memory as before. Records of at most max_stride bytes.
+  // buffer may be packed again). The copies run on the copy stream (cuda_copy_async): kernels
+  // queued between begin_packed and finish_packed (the interior tets) go on meanwhile, and the
+  // records are in finish_packed's buffer for every kernel queued after it. Collective; true only
+  // when every rank asks (`want`), every neighbour is on this node and QDEMSPH_DEVICE_HALO is not
+  // 0; otherwise records are staged through host memory as before. Records of at most max_stride
+  // bytes.
   bool use_device(bool want, std::size_t max_stride);
   Space packed_space() const { return device_ ? Space::Cuda : Space::Host; }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/memory.hpp"
+#include "core/timers.hpp"
 
 namespace qdemsph {
 namespace {
@@ -72,6 +73,32 @@ TEST(Memory, StagingBytesArePinnedOnceTheProcessUsesAGpu) {
   Buffer<double> back(Space::Cuda, v.size());
   space_copy(back.view().p, Space::Cuda, t.data(), Space::Host, t.size());
   EXPECT_EQ(back.to_host(), v);
+}
+
+// The copy stream (a GPU halo's peer copies): copies issued there are complete after
+// cuda_copy_wait, whatever the default stream is still running.
+TEST(Memory, CopyStreamCopiesAreDoneAfterTheWait) {
+  if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
+  std::vector<double> v(1 << 16);
+  for (std::size_t k = 0; k < v.size(); ++k) v[k] = 0.5 * static_cast<double>(k) - 7;
+  Buffer<double> a(Space::Cuda), b(Space::Cuda, static_cast<std::int64_t>(v.size()));
+  a.assign(v);
+  cuda_sync();  // a's contents are there before the copy stream reads them
+  cuda_copy_async(b.view().p, a.cview().p, v.size() * sizeof(double));
+  cuda_copy_wait();
+  EXPECT_EQ(b.to_host(), v);
+}
+
+// A scope synchronises before it stops its timer; a launch() scope does not (its device work
+// counts in the next synchronised scope).
+TEST(Memory, TimerScopesSynchroniseUnlessTheyOnlyLaunch) {
+  int syncs = 0;
+  PhaseTimers t([&] { ++syncs; });
+  { auto s = t.scope("a"); }
+  EXPECT_EQ(syncs, 1);
+  { auto s = t.launch("b"); }
+  EXPECT_EQ(syncs, 1);
+  EXPECT_EQ(t.seconds().count("a") + t.seconds().count("b"), 2u);
 }
 
 // An MPI rank's GPU: its rank on the node modulo the node's GPUs (parallel/world.cpp).
