@@ -173,10 +173,14 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       ++steps_;
     }
     maybe_rebuild(dt_diss > 0);
+    // The phases count dynamic steps, as the Stepper's and the contact stage's do: the first
+    // evaluation (the Stepper's set-up) and relaxation sweeps (dt_diss = 0) are not steps.
+    PhaseTimers untimed;
+    PhaseTimers& tm = dt_diss > 0 ? timers_ : untimed;
     CommEngine& e = halo_->engine();
     {
-      auto s = timers_.scope("halo");
-      auto s1 = timers_.scope("halo.xv");
+      auto s = tm.scope("halo");
+      auto s1 = tm.scope("halo.xv");
       auto buf = e.packed_send_buffer(6 * sizeof(double));
       local_->pack_halo(reinterpret_cast<double*>(buf.data()), e.packed_space());
       e.begin_packed();
@@ -184,33 +188,33 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     // On a GPU the interior tets run while the halo's records are copied (on the copy stream)
     // and unpacked; their time counts in "elements" at the synchronisation below.
     {
-      auto s = timers_.launch("elements");
+      auto s = tm.launch("elements");
       local_->element_forces(0, L_.n_interior, dt_diss);
     }
     {
-      auto s = timers_.launch("halo");
-      auto s1 = timers_.launch("halo.xv");
+      auto s = tm.launch("halo");
+      auto s1 = tm.launch("halo.xv");
       const auto in = e.finish_packed();
       local_->unpack_halo(reinterpret_cast<const double*>(in.data()), e.packed_space());
       halo_bytes_ += e.last_bytes();
     }
     std::vector<ContactShare> out;
     {
-      auto s = timers_.scope("elements");
+      auto s = tm.scope("elements");
       local_->element_forces(L_.n_interior, static_cast<std::int64_t>(L_.tets.size()), dt_diss);
       local_->sync();  // the tets' device time counts here, not in the contact stage's phases
       local_->assemble_forces(dt_diss, alpha);
-      auto s1 = timers_.scope("elements.shares");
+      auto s1 = tm.scope("elements.shares");
       out = local_->contact_shares();
     }
     std::vector<ContactShare> in;
     if (contact_) {
-      auto s = timers_.scope("halo");
-      auto s1 = timers_.scope("halo.shares");
+      auto s = tm.scope("halo");
+      auto s1 = tm.scope("halo.shares");
       in = exchange_shares(out);
     }
     {
-      auto s = timers_.scope("elements");
+      auto s = tm.scope("elements");
       local_->add_contact_forces(in);
     }
     ++exchanges_;
