@@ -102,9 +102,12 @@ class Buffer {
     }
     n_ = n;
   }
+  void assign(const T* host, std::int64_t n) {
+    resize_for_overwrite(n);
+    if (n_ > 0) space_copy(p_, space_, host, Space::Host, sizeof(T) * n_);
+  }
   void assign(const std::vector<T>& host) {
-    resize_for_overwrite(static_cast<std::int64_t>(host.size()));
-    if (n_ > 0) space_copy(p_, space_, host.data(), Space::Host, sizeof(T) * n_);
+    assign(host.data(), static_cast<std::int64_t>(host.size()));
   }
   std::vector<T> to_host() const {
     std::vector<T> h(n_);
@@ -204,5 +207,22 @@ class StagingBytes {
   std::size_t size_ = 0, cap_ = 0;
   bool pinned_ = false;
 };
+
+// A buffer's n elements computed on the host (a model's upload): write(out) stores them into
+// out[0, n), typically in a for_each(HostExec{}, ...). A host buffer is written in place, a
+// device one through `stage`, which the caller keeps: the next upload reuses its pages, and on a
+// GPU rank they are page-locked (the copy runs at the link's speed).
+template <class T, class Write>
+void write_on_host(Buffer<T>& b, std::int64_t n, StagingBytes& stage, Write write) {
+  if (b.space() == Space::Host) {
+    b.resize_for_overwrite(n);
+    write(b.view().p);
+    return;
+  }
+  stage.resize(sizeof(T) * n);
+  T* out = reinterpret_cast<T*>(stage.data());
+  write(out);
+  b.assign(out, n);
+}
 
 }  // namespace qdemsph
