@@ -1,6 +1,7 @@
 #include "parallel/distributed_backend.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -10,6 +11,7 @@
 
 #include "core/error.hpp"
 #include "core/exec_host.hpp"
+#include "core/parallel_sort.hpp"
 #include "core/timers.hpp"
 #include "parallel/balance.hpp"
 #include "parallel/band_cells.hpp"
@@ -897,13 +899,13 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     std::optional<PhaseTimers::Scope> part;
     part.emplace(timers_, "migration.state");
     std::int64_t bytes = 0;
-    // New owners; every rank learns the changes (owner_ covers all free vertices).
+    // New owners (a curve key each, in parallel); every rank learns the changes (owner_ covers
+    // all free vertices).
     std::vector<int> dest(nsv);
+    for_each(HostExec{}, nsv, [&](std::int64_t k) { dest[k] = dec_.owner(s.x[k]); });
     std::vector<std::pair<std::int64_t, std::int64_t>> changed;
-    for (std::int64_t k = 0; k < nsv; ++k) {
-      dest[k] = dec_.owner(s.x[k]);
+    for (std::int64_t k = 0; k < nsv; ++k)
       if (owner_[s.vertex[k]] != dest[k]) changed.push_back({s.vertex[k], dest[k]});
-    }
     const auto all_changed = allgatherv(comm_, changed, &bytes);
     for (const auto& [gv, r] : all_changed) owner_[gv] = static_cast<std::int32_t>(r);
     if (all_changed.empty() && !always) {
@@ -938,18 +940,27 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     mv.finish(dst);
     bytes += mv.engine().last_bytes();
 
-    // Tets: from their holder to every new owner of one of their vertices.
+    // Tets: from their holder to every new owner of one of their vertices (each tet's ranks
+    // sorted, without repeats; counted, then written, in parallel).
     const std::int64_t nst = static_cast<std::int64_t>(s.tet.size());
-    std::vector<std::int64_t> toff{0};
-    std::vector<int> tranks;
-    for (std::int64_t k = 0; k < nst; ++k) {
+    auto tet_ranks = [&](std::int64_t k, int* r) {
       const auto& tv = g_->tets[s.tet[k]];
-      const std::size_t first = tranks.size();
-      for (int q = 0; q < 4; ++q) tranks.push_back(owner_[tv[q]]);
-      std::sort(tranks.begin() + first, tranks.end());
-      tranks.erase(std::unique(tranks.begin() + first, tranks.end()), tranks.end());
-      toff.push_back(static_cast<std::int64_t>(tranks.size()));
-    }
+      for (int q = 0; q < 4; ++q) r[q] = owner_[tv[q]];
+      std::sort(r, r + 4);
+      return static_cast<std::int64_t>(std::unique(r, r + 4) - r);
+    };
+    std::vector<std::int64_t> toff(nst + 1, 0);
+    for_each(HostExec{}, nst, [&](std::int64_t k) {
+      int r[4];
+      toff[k + 1] = tet_ranks(k, r);
+    });
+    std::partial_sum(toff.begin(), toff.end(), toff.begin());
+    std::vector<int> tranks(toff[nst]);
+    for_each(HostExec{}, nst, [&](std::int64_t k) {
+      int r[4];
+      const std::int64_t n = tet_ranks(k, r);
+      std::copy(r, r + n, tranks.begin() + toff[k]);
+    });
     CommEngine te(comm_, toff, tranks, 0);
     std::vector<std::int64_t> tg(te.n_recv());
     std::vector<double> td(te.n_recv());
@@ -990,30 +1001,22 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
     migrated_bytes_ += bytes;
 
-    // The new owned vertices in gid order, so a rank's layout depends only on what it owns.
-    std::vector<std::int64_t> perm(nn);
-    std::iota(perm.begin(), perm.end(), std::int64_t{0});
-    const auto& ng = mv.new_gids();
-    std::sort(perm.begin(), perm.end(), [&](auto a, auto b) { return ng[a] < ng[b]; });
+    // The new owned vertices in gid order, so a rank's layout depends only on what it owns,
+    // and the tets in gid order (install looks them up): sorted and gathered in parallel.
     StateSlice mine;
-    for (std::int64_t k : perm) {
-      mine.vertex.push_back(static_cast<std::int64_t>(ng[k]));
-      mine.x.push_back(x[k]);
-      mine.v.push_back(v[k]);
-      if (any_f) mine.f.push_back(f[k]);
-      mine.diss_v.push_back(dv[k]);
-      if (any_relax) {
-        mine.x0.push_back(x0[k]);
-        mine.f0.push_back(f0[k]);
-      }
+    const std::vector<std::int64_t> perm = sorted_order(mv.new_gids());
+    mine.vertex = gathered<std::int64_t>(mv.new_gids(), perm);
+    mine.x = gathered<Vec3>(x, perm);
+    mine.v = gathered<Vec3>(v, perm);
+    if (any_f) mine.f = gathered<Vec3>(f, perm);
+    mine.diss_v = gathered<double>(dv, perm);
+    if (any_relax) {
+      mine.x0 = gathered<Vec3>(x0, perm);
+      mine.f0 = gathered<Vec3>(f0, perm);
     }
-    std::vector<std::int64_t> tperm(tg.size());
-    std::iota(tperm.begin(), tperm.end(), std::int64_t{0});
-    std::sort(tperm.begin(), tperm.end(), [&](auto a, auto b) { return tg[a] < tg[b]; });
-    for (std::int64_t k : tperm) {
-      mine.tet.push_back(tg[k]);
-      mine.diss_t.push_back(td[k]);
-    }
+    const std::vector<std::int64_t> tperm = sorted_order(tg);
+    mine.tet = gathered<std::int64_t>(tg, tperm);
+    mine.diss_t = gathered<double>(td, tperm);
     mine.contact = std::move(hist);
     part.reset();
     install(mine);
@@ -1183,25 +1186,31 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       std::copy(s.f0.begin(), s.f0.end(), st.f0.begin());
     }
     st.diss_t.resize(L.tets.size());
-    for (std::size_t j = 0; j < L.tets.size(); ++j) {
+    std::atomic<std::int64_t> missing{-1};  // a held tet whose state did not arrive
+    for_each(HostExec{}, static_cast<std::int64_t>(L.tets.size()), [&](std::int64_t j) {
       const auto it = std::lower_bound(s.tet.begin(), s.tet.end(), L.tets[j]);
       if (it == s.tet.end() || *it != L.tets[j])
-        throw std::logic_error("distributed install: no state arrived for tet " +
-                               std::to_string(L.tets[j]));
-      st.diss_t[j] = s.diss_t[it - s.tet.begin()];
-    }
+        missing.store(L.tets[j], std::memory_order_relaxed);
+      else
+        st.diss_t[j] = s.diss_t[it - s.tet.begin()];
+    });
+    if (missing >= 0)
+      throw std::logic_error("distributed install: no state arrived for tet " +
+                             std::to_string(missing));
     // Contact history in this rank's feature ids and vertex indices, sorted by key (no
     // pair-list reference: the list is built for this layout at the next step).
     if (contact_) {
       const ContactState& sc = s.contact;
-      std::vector<std::size_t> hidx;
-      std::vector<std::pair<std::uint64_t, std::uint64_t>> lk(sc.size());
-      for (std::size_t e = 0; e < sc.size(); ++e) {
+      const auto nsc = static_cast<std::int64_t>(sc.size());
+      std::vector<std::pair<std::uint64_t, std::uint64_t>> lk(nsc);
+      for_each(HostExec{}, nsc, [&](std::int64_t e) {
         lk[e] = {lm.ids.k1_to_local(sc.k1[e]), FeatureIds::kNone};
         if (lk[e].first != FeatureIds::kNone) lk[e].second = lm.ids.k2_to_local(sc.k1[e], sc.k2[e]);
+      });
+      std::vector<std::size_t> hidx;
+      for (std::int64_t e = 0; e < nsc; ++e)
         if (lk[e].first != FeatureIds::kNone && lk[e].second != FeatureIds::kNone)
           hidx.push_back(e);
-      }
       std::sort(hidx.begin(), hidx.end(), [&](auto a, auto b) { return lk[a] < lk[b]; });
       hidx.erase(
           std::unique(hidx.begin(), hidx.end(), [&](auto a, auto b) { return lk[a] == lk[b]; }),
