@@ -12,6 +12,7 @@
 #include "core/error.hpp"
 #include "core/exec_host.hpp"
 #include "core/parallel_sort.hpp"
+#include "core/select_host.hpp"
 #include "core/timers.hpp"
 #include "parallel/balance.hpp"
 #include "parallel/band_cells.hpp"
@@ -1033,7 +1034,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     L.n_owned = static_cast<std::int64_t>(s.vertex.size());
     // Held tets: every free tet with an owned vertex (the owned vertices are those owner_
     // gives this rank), in id order; interior, boundary home, halo. Each tet's class is
-    // decided in parallel, the lists are collected in order.
+    // decided in parallel, the lists are collected in order (in parallel too).
     std::vector<std::uint8_t> cls(g.n_free_tets);
     enum : std::uint8_t { kInterior, kBoundary, kHalo, kNotHeld };
     for_each(HostExec{}, g.n_free_tets, [&](std::int64_t t) {
@@ -1045,14 +1046,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
                : owned > 0                                              ? kHalo
                                                                         : kNotHeld;
     });
-    std::vector<std::int64_t> boundary, halo;
-    for (std::int64_t t = 0; t < g.n_free_tets; ++t)
-      if (cls[t] == kInterior)
-        L.tets.push_back(t);
-      else if (cls[t] == kBoundary)
-        boundary.push_back(t);
-      else if (cls[t] == kHalo)
-        halo.push_back(t);
+    auto of_class = [&](std::uint8_t c) {
+      return select_indices(HostExec{}, g.n_free_tets, [&](std::int64_t t) { return cls[t] == c; });
+    };
+    L.tets = of_class(kInterior);
+    const std::vector<std::int64_t> boundary = of_class(kBoundary), halo = of_class(kHalo);
     L.n_interior = static_cast<std::int64_t>(L.tets.size());
     L.tets.insert(L.tets.end(), boundary.begin(), boundary.end());
     L.n_home = static_cast<std::int64_t>(L.tets.size());
