@@ -1157,7 +1157,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       x.push_back(g.x[L.vertices[i]]);
       v.push_back(g.v[L.vertices[i]]);
     }
-    LocalModel lm = build_local_model(g, ix_, L, x, v);
+    build_local_model(g, ix_, L, x, v, lm_);
     part.reset();
     part.emplace(timers_, "migration.upload");
 
@@ -1168,11 +1168,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       overlap_acc_ = std::max(overlap_acc_, c["max_overlap_ever"]);
       rebuilds_acc_ += c["pair_rebuilds"];
     }
-    local_->upload(lm.model);
+    local_->upload(lm_.model);
     local_->use_preload(preload_);
     BackendState st;
-    st.x = lm.model.x;
-    st.v = lm.model.v;
+    st.x = lm_.model.x;
+    st.v = lm_.model.v;
     st.f.assign(nv, Vec3{});  // empty in the slice: the next compute_forces evaluates them
     std::copy(s.f.begin(), s.f.end(), st.f.begin());
     st.diss_v.assign(nv, 0.0);
@@ -1202,8 +1202,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       const auto nsc = static_cast<std::int64_t>(sc.size());
       std::vector<std::pair<std::uint64_t, std::uint64_t>> lk(nsc);
       for_each(HostExec{}, nsc, [&](std::int64_t e) {
-        lk[e] = {lm.ids.k1_to_local(sc.k1[e]), FeatureIds::kNone};
-        if (lk[e].first != FeatureIds::kNone) lk[e].second = lm.ids.k2_to_local(sc.k1[e], sc.k2[e]);
+        lk[e] = {lm_.ids.k1_to_local(sc.k1[e]), FeatureIds::kNone};
+        if (lk[e].first != FeatureIds::kNone)
+          lk[e].second = lm_.ids.k2_to_local(sc.k1[e], sc.k2[e]);
       });
       std::vector<std::size_t> hidx;
       for (std::int64_t e = 0; e < nsc; ++e)
@@ -1220,7 +1221,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
         c.k1.back() = lk[e].first;
         c.k2.back() = lk[e].second;
         for (int q = 0; q < 4; ++q)
-          if (sc.v[e][q] >= 0) c.v.back()[q] = lm.ids.local_vertex(sc.v[e][q]);
+          if (sc.v[e][q] >= 0) c.v.back()[q] = lm_.ids.local_vertex(sc.v[e][q]);
       }
     }
     local_->load_state(st);
@@ -1228,7 +1229,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     local_->set_halo(halo_->engine().send_index(), L.n_owned, halo_->n_ghost());
     local_->mark_positions();
     L_ = std::move(L);
-    ids_ = std::move(lm.ids);
+    std::swap(ids_, lm_.ids);  // the old ids' storage serves the next rebuild
     if (coupled_) install_coupling();
     ++rebuilds_;
   }
@@ -1279,6 +1280,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   Decomposition dec_;
   LocalLayout L_;
   FeatureIds ids_;
+  LocalModel lm_;  // the last layout's model, its storage reused by the next (install)
   std::unique_ptr<HaloPlan> halo_;
   bool contact_ = false, preload_ = false, relaxing_ = false;
   double band_ = 1, slack_ = 0;

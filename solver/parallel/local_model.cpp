@@ -146,10 +146,18 @@ ContactShare FeatureIds::to_local(ContactShare s) const {
 LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& L,
                              const std::vector<Vec3>& x, const std::vector<Vec3>& v,
                              bool with_contact) {
+  LocalModel out;
+  build_local_model(g, ix, L, x, v, out, with_contact);
+  return out;
+}
+
+// Every array of `out` is overwritten whole (resized, then written), never appended to.
+void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& L,
+                       const std::vector<Vec3>& x, const std::vector<Vec3>& v, LocalModel& out,
+                       bool with_contact) {
   const std::int64_t nv = static_cast<std::int64_t>(L.vertices.size());
   if (static_cast<std::int64_t>(x.size()) != nv || static_cast<std::int64_t>(v.size()) != nv)
     throw std::invalid_argument("build_local_model: x and v need one entry per listed vertex");
-  LocalModel out;
   Model& m = out.model;
   std::vector<std::int32_t> g2l(g.n_vertices(), -1);
   for (std::int64_t i = 0; i < nv; ++i) g2l[L.vertices[i]] = static_cast<std::int32_t>(i);
@@ -206,12 +214,17 @@ LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLa
 
   const ContactModel& gc = g.contact;
   ContactModel& c = m.contact;
+  if (!with_contact || !gc.enabled) {
+    c = ContactModel{};
+    c.mode = gc.mode;
+    c.n_surface_tets = gc.n_surface_tets;
+    out.ids.triangle.clear();
+    out.ids.edge.clear();
+    out.ids.finish();
+    return;
+  }
   c.mode = gc.mode;
   c.n_surface_tets = gc.n_surface_tets;
-  if (!with_contact || !gc.enabled) {
-    out.ids.finish();
-    return out;
-  }
   c.enabled = true;
   c.d_dem = gc.d_dem;
   c.self_contact = gc.self_contact;
@@ -322,12 +335,10 @@ LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLa
   // Free bodies' primitives come first: the count up to the last free one.
   c.n_free_prims = npl;
   while (c.n_free_prims > 0 && gc.body_fixed[c.prim_body[c.n_free_prims - 1]]) --c.n_free_prims;
-  for (std::int64_t i : select_indices(HostExec{}, L.n_owned, [&](std::int64_t i) {
-         return ix.wall_vertex[L.vertices[i]] != 0;
-       }))
-    c.wall_vertices.push_back(static_cast<std::int32_t>(i));
+  const std::vector<std::int64_t> wall = select_indices(
+      HostExec{}, L.n_owned, [&](std::int64_t i) { return ix.wall_vertex[L.vertices[i]] != 0; });
+  c.wall_vertices.assign(wall.begin(), wall.end());
   out.ids.finish();
-  return out;
 }
 
 }  // namespace qdemsph
