@@ -575,11 +575,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   StateSlice export_state() override {
     StateSlice s;
     const BackendState st = local_->save_state();
-    for (std::int64_t i = 0; i < L_.n_owned; ++i) s.add_vertex(L_.vertices[i], st, i, relaxing_);
-    for (std::int64_t j = 0; j < L_.n_home; ++j) {
-      s.tet.push_back(L_.tets[j]);
-      s.diss_t.push_back(st.diss_t[j]);
-    }
+    s.set_vertices(owned_vertices(), st, 0, relaxing_);
+    s.tet = home_tets();
+    s.diss_t.assign(st.diss_t.begin(), st.diss_t.begin() + L_.n_home);
     // Each history entry once: a rank holds the history of the records it evaluates only
     // (those anchored at its owned vertices, contact_record.hpp anchor_slot).
     if (!st.contact) return s;
@@ -669,12 +667,14 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     if (coupled_) cfc_.assign(w.fc.empty() ? std::vector<Vec3>(nv) : w.fc);
     StateSlice s;
     const std::int64_t nfv = g.n_free_vertices, nft = g.n_free_tets;
-    for (std::int64_t i = nfv * me_ / np_; i < nfv * (me_ + 1) / np_; ++i)
-      s.add_vertex(i, w, i, relax);
-    for (std::int64_t t = nft * me_ / np_; t < nft * (me_ + 1) / np_; ++t) {
-      s.tet.push_back(t);
-      s.diss_t.push_back(w.diss_t[t]);
-    }
+    const std::int64_t v0 = nfv * me_ / np_, v1 = nfv * (me_ + 1) / np_;
+    const std::int64_t t0 = nft * me_ / np_, t1 = nft * (me_ + 1) / np_;
+    std::vector<std::int64_t> ids(v1 - v0);
+    std::iota(ids.begin(), ids.end(), v0);
+    s.set_vertices(std::move(ids), w, v0, relax);
+    s.tet.resize(t1 - t0);
+    std::iota(s.tet.begin(), s.tet.end(), t0);
+    s.diss_t.assign(w.diss_t.begin() + t0, w.diss_t.begin() + t1);
     if (contact_) {
       const ContactState& c = *w.contact;
       const std::int64_t ne = static_cast<std::int64_t>(c.size());
@@ -1002,8 +1002,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
     migrated_bytes_ += bytes;
 
-    // The new owned vertices in gid order, so a rank's layout depends only on what it owns,
-    // and the tets in gid order (install looks them up): sorted and gathered in parallel.
+    // The new owned vertices in gid order, so a rank's layout depends only on what it owns
+    // (sorted and gathered in parallel); the tets as they came.
     StateSlice mine;
     const std::vector<std::int64_t> perm = sorted_order(mv.new_gids());
     mine.vertex = gathered<std::int64_t>(mv.new_gids(), perm);
@@ -1015,16 +1015,15 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       mine.x0 = gathered<Vec3>(x0, perm);
       mine.f0 = gathered<Vec3>(f0, perm);
     }
-    const std::vector<std::int64_t> tperm = sorted_order(tg);
-    mine.tet = gathered<std::int64_t>(tg, tperm);
-    mine.diss_t = gathered<double>(td, tperm);
+    mine.tet = std::move(tg);
+    mine.diss_t = std::move(td);
     mine.contact = std::move(hist);
     part.reset();
     install(mine);
   }
 
   // Builds the rank's part from its owned state (vertices in gid order, the state of every
-  // tet it will hold, its contact history) and uploads it.
+  // tet it will hold in any order, its contact history) and uploads it.
   void install(const StateSlice& s) {
     std::optional<PhaseTimers::Scope> part;
     part.emplace(timers_, "migration.layout");
@@ -1034,7 +1033,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     L.n_owned = static_cast<std::int64_t>(s.vertex.size());
     // Held tets: every free tet with an owned vertex (the owned vertices are those owner_
     // gives this rank), in id order; interior, boundary home, halo. Each tet's class is
-    // decided in parallel, the lists are collected in order (in parallel too).
+    // decided in parallel, then the tets are bucketed by class (in parallel too).
     std::vector<std::uint8_t> cls(g.n_free_tets);
     enum : std::uint8_t { kInterior, kBoundary, kHalo, kNotHeld };
     for_each(HostExec{}, g.n_free_tets, [&](std::int64_t t) {
@@ -1046,15 +1045,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
                : owned > 0                                              ? kHalo
                                                                         : kNotHeld;
     });
-    auto of_class = [&](std::uint8_t c) {
-      return select_indices(HostExec{}, g.n_free_tets, [&](std::int64_t t) { return cls[t] == c; });
-    };
-    L.tets = of_class(kInterior);
-    const std::vector<std::int64_t> boundary = of_class(kBoundary), halo = of_class(kHalo);
-    L.n_interior = static_cast<std::int64_t>(L.tets.size());
-    L.tets.insert(L.tets.end(), boundary.begin(), boundary.end());
-    L.n_home = static_cast<std::int64_t>(L.tets.size());
-    L.tets.insert(L.tets.end(), halo.begin(), halo.end());
+    Buckets held =
+        bucket_indices(HostExec{}, g.n_free_tets, kNotHeld, [&](std::int64_t t) { return cls[t]; });
+    L.tets = std::move(held.index);
+    L.n_interior = held.start[kBoundary];
+    L.n_home = held.start[kHalo];
 
     // Contact band: the cells holding this rank's owned contact vertices, published to all.
     std::unordered_map<std::uint64_t, std::vector<int>> occupied;  // cell -> other ranks
@@ -1183,14 +1178,20 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       std::copy(s.x0.begin(), s.x0.end(), st.x0.begin());
       std::copy(s.f0.begin(), s.f0.end(), st.f0.begin());
     }
+    // Each held tet's dissipation from its slot in the slice, found by gid in tet_slot_ (its
+    // entries of tets the slice lacks are stale, so a hit is checked).
+    const auto nst = static_cast<std::int64_t>(s.tet.size());
+    tet_slot_.resize(g.n_free_tets);
+    for_each(HostExec{}, nst,
+             [&](std::int64_t k) { tet_slot_[s.tet[k]] = static_cast<std::int32_t>(k); });
     st.diss_t.resize(L.tets.size());
     std::atomic<std::int64_t> missing{-1};  // a held tet whose state did not arrive
     for_each(HostExec{}, static_cast<std::int64_t>(L.tets.size()), [&](std::int64_t j) {
-      const auto it = std::lower_bound(s.tet.begin(), s.tet.end(), L.tets[j]);
-      if (it == s.tet.end() || *it != L.tets[j])
-        missing.store(L.tets[j], std::memory_order_relaxed);
+      const std::int64_t k = tet_slot_[L.tets[j]];
+      if (k < nst && s.tet[k] == L.tets[j])
+        st.diss_t[j] = s.diss_t[k];
       else
-        st.diss_t[j] = s.diss_t[it - s.tet.begin()];
+        missing.store(L.tets[j], std::memory_order_relaxed);
     });
     if (missing >= 0)
       throw std::logic_error("distributed install: no state arrived for tet " +
@@ -1281,6 +1282,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   LocalLayout L_;
   FeatureIds ids_;
   LocalModel lm_;  // the last layout's model, its storage reused by the next (install)
+  std::vector<std::int32_t> tet_slot_;  // per free tet: its slot in install's slice (or stale)
   std::unique_ptr<HaloPlan> halo_;
   bool contact_ = false, preload_ = false, relaxing_ = false;
   double band_ = 1, slack_ = 0;

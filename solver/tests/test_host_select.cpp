@@ -1,6 +1,6 @@
-// Host orchestration primitives of a distributed rank's layout rebuild: stream compaction
-// (core/select_host.hpp) and the sorting permutation (core/parallel_sort.hpp) give the serial
-// answers, the same for any number of threads.
+// Host orchestration primitives of a distributed rank's layout rebuild: stream compaction and
+// bucketing by key (core/select_host.hpp) and the sorting permutation (core/parallel_sort.hpp)
+// give the serial answers, the same for any number of threads.
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -37,6 +37,23 @@ TEST(HostSelect, IndicesInOrderForAnyThreadCount) {
   EXPECT_TRUE(select_indices(HostExec{}, 0, keep).empty());
   EXPECT_EQ(select_indices(HostExec{}, 5, [](std::int64_t i) { return i != 2; }),
             (std::vector<std::int64_t>{0, 1, 3, 4}));
+}
+
+TEST(HostSelect, BucketsByKeyInOrderForAnyThreadCount) {
+  const std::int64_t n = 4 * kMinParallel + 5;
+  auto key = [](std::int64_t i) { return static_cast<int>((i * 31) % 7) - 1; };  // -1..5
+  Buckets serial;
+  serial.start.push_back(0);
+  for (int k = 0; k < 4; ++k) {  // keys 0..3 kept, -1, 4 and 5 dropped
+    for (std::int64_t i = 0; i < n; ++i)
+      if (key(i) == k) serial.index.push_back(i);
+    serial.start.push_back(static_cast<std::int64_t>(serial.index.size()));
+  }
+  for (int t : {1, 2, 3, 8}) {
+    const Buckets b = with_threads(t, [&] { return bucket_indices(HostExec{}, n, 4, key); });
+    EXPECT_EQ(b.index, serial.index) << t << " threads";
+    EXPECT_EQ(b.start, serial.start) << t << " threads";
+  }
 }
 
 TEST(HostSelect, SortedOrderOfUniqueKeysForAnyThreadCount) {
