@@ -927,10 +927,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     std::vector<double> dv(nn);
     std::vector<CommField> src{cfield(s.x), cfield(s.v), cfield(s.diss_v)},
         dst{cfield(x), cfield(v), cfield(dv)};
-    const std::vector<Vec3> zeros(nsv);
+    std::vector<Vec3> zeros;  // made only when some field is missing here
     auto optional_field = [&](bool any_rank, const std::vector<Vec3>& from, std::vector<Vec3>& to) {
       if (!any_rank) return;
       to.resize(nn);
+      if (from.empty()) zeros.resize(nsv);
       src.push_back(cfield(from.empty() ? zeros : from));
       dst.push_back(cfield(to));
     };
