@@ -245,11 +245,14 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   // Primitives with every vertex local, in global order (free bodies first): each global
   // primitive tested in parallel, the kept ones collected in order.
   const std::int64_t ngp = static_cast<std::int64_t>(gc.prim_v.size());
-  const std::vector<std::int64_t> prims = select_indices(HostExec{}, ngp, [&](std::int64_t p) {
+  std::vector<std::uint8_t> keep(ngp);
+  for_each(HostExec{}, ngp, [&](std::int64_t p) {
     bool all = true;
     for (int k = 0; k < 4; ++k) all = all && (gc.prim_v[p][k] < 0 || g2l[gc.prim_v[p][k]] >= 0);
-    return all;
+    keep[p] = all;
   });
+  const std::vector<std::int64_t> prims =
+      select_indices(HostExec{}, ngp, [&](std::int64_t p) { return keep[p] != 0; });
   const auto npl = static_cast<std::int64_t>(prims.size());
   // Their triangles and the triangles' edges, in global order (marked, then collected), and
   // global -> local numbers (-1: not held).
