@@ -48,6 +48,7 @@
 #include "contact/contact_state.hpp"
 #include "core/error.hpp"
 #include "core/error_flag.hpp"
+#include "core/exec_host.hpp"
 #include "core/memory.hpp"
 #include "core/timers.hpp"
 #include "model/model.hpp"
