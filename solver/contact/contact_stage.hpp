@@ -48,6 +48,7 @@
 #include "contact/contact_state.hpp"
 #include "core/error.hpp"
 #include "core/error_flag.hpp"
+#include "core/exec_host.hpp"
 #include "core/memory.hpp"
 #include "core/timers.hpp"
 #include "model/model.hpp"
@@ -281,6 +282,8 @@ class ContactStage {
  public:
   ContactStage() : timers_([] { exec_sync(Exec{}); }) {}
 
+  // The model's contact topology, and a fresh start (no history, pair list or counters); a
+  // stage uploaded again keeps its storage (a distributed rank's rebuilt model).
   void upload(const Model& m) {
     const ContactModel& c = m.contact;
     nv_ = m.n_vertices();
@@ -294,7 +297,6 @@ class ContactStage {
     d_dem_ = c.d_dem;
     max_pen_ = c.max_penetration;
     pen_flag_.resize(1);
-    pen_flag_.zero();
     pen_rec_.resize(1);
     pen_val_.resize(2);
     self_ = c.self_contact;
@@ -302,21 +304,28 @@ class ContactStage {
     kt_ratio_ = c.kt_ratio;
     skin_setting_ = c.skin;
     nm_ = c.n_mat;
-    std::vector<std::int32_t> tv(3 * ntri_), ev(2 * ne_), et(2 * ne_), pv(4 * np_);
-    for (std::int64_t s = 0; s < ntri_; ++s)
-      for (int k = 0; k < 3; ++k) tv[k * ntri_ + s] = c.tri_v[s][k];
-    for (std::int64_t e = 0; e < ne_; ++e)
-      for (int k = 0; k < 2; ++k) {
-        ev[k * ne_ + e] = c.edges[e][k];
-        et[k * ne_ + e] = c.edge_tri[e][k];
-      }
-    for (std::int64_t p = 0; p < np_; ++p)
-      for (int k = 0; k < 4; ++k) pv[k * np_ + p] = c.prim_v[p][k];
-    tri_v_.assign(tv);
-    edge_v_.assign(ev);
-    edge_tri_.assign(et);
+    const std::int64_t ntri = ntri_, ne = ne_, np = np_, nw = nw_;
+    write_on_host(tri_v_, 3 * ntri, stage_, [&](std::int32_t* tv) {
+      for_each(HostExec{}, ntri, [&](std::int64_t s) {
+        for (int k = 0; k < 3; ++k) tv[k * ntri + s] = c.tri_v[s][k];
+      });
+    });
+    write_on_host(edge_v_, 2 * ne, stage_, [&](std::int32_t* ev) {
+      for_each(HostExec{}, ne, [&](std::int64_t e) {
+        for (int k = 0; k < 2; ++k) ev[k * ne + e] = c.edges[e][k];
+      });
+    });
+    write_on_host(edge_tri_, 2 * ne, stage_, [&](std::int32_t* et) {
+      for_each(HostExec{}, ne, [&](std::int64_t e) {
+        for (int k = 0; k < 2; ++k) et[k * ne + e] = c.edge_tri[e][k];
+      });
+    });
+    write_on_host(prim_v_, 4 * np, stage_, [&](std::int32_t* pv) {
+      for_each(HostExec{}, np, [&](std::int64_t p) {
+        for (int k = 0; k < 4; ++k) pv[k * np + p] = c.prim_v[p][k];
+      });
+    });
     tri_n_.resize(ntri_);
-    prim_v_.assign(pv);
     tri_body_.assign(c.tri_body);
     prim_body_.assign(c.prim_body);
     own_v_off_.assign(c.own_v_off);
@@ -333,24 +342,23 @@ class ContactStage {
     pair_zeta_.assign(c.pair_zeta);
     pair_kn_.assign(c.pair_kn);
     pair_E_.assign(c.pair_E);
-    std::vector<double> wall(8 * nw_);
-    for (std::int64_t w = 0; w < nw_; ++w) {
-      const ContactWall& cw = c.walls[w];
-      const double vals[8] = {cw.point.x,  cw.point.y,  cw.point.z, cw.normal.x,
-                              cw.normal.y, cw.normal.z, cw.mu,      cw.zeta};
-      for (int k = 0; k < 8; ++k) wall[8 * w + k] = vals[k];
-    }
-    wall_.assign(wall);
-    std::vector<double> wk(nw_);
-    for (std::int64_t w = 0; w < nw_; ++w) wk[w] = c.walls[w].stiffness;
-    wall_kn_.assign(wk);
+    write_on_host(wall_, 8 * nw, stage_, [&](double* wall) {
+      for (std::int64_t w = 0; w < nw; ++w) {
+        const ContactWall& cw = c.walls[w];
+        const double vals[8] = {cw.point.x,  cw.point.y,  cw.point.z, cw.normal.x,
+                                cw.normal.y, cw.normal.z, cw.mu,      cw.zeta};
+        for (int k = 0; k < 8; ++k) wall[8 * w + k] = vals[k];
+      }
+    });
+    write_on_host(wall_kn_, nw, stage_, [&](double* wk) {
+      for (std::int64_t w = 0; w < nw; ++w) wk[w] = c.walls[w].stiffness;
+    });
     vertex_body_.assign(m.body);
-    std::vector<std::uint64_t> vgid = m.gid;  // a model without ids: numbered by index
-    if (static_cast<std::int64_t>(vgid.size()) != nv_) {
-      vgid.resize(nv_);
-      std::iota(vgid.begin(), vgid.end(), std::uint64_t{0});
-    }
-    vgid_.assign(vgid);
+    const std::int64_t nv = nv_;
+    write_on_host(vgid_, nv, stage_, [&](std::uint64_t* g) {
+      const bool ids = static_cast<std::int64_t>(m.gid.size()) == nv;  // else numbered by index
+      for_each(HostExec{}, nv, [&](std::int64_t i) { g[i] = ids ? m.gid[i] : i; });
+    });
     inv_mass_.assign(m.inv_mass);
     ghosts_ = false;  // free vertices other ranks own (a distributed run's rank)
     for (std::int64_t i = nfv_; i < nv_; ++i) ghosts_ = ghosts_ || !c.body_fixed[m.body[i]];
@@ -358,12 +366,21 @@ class ContactStage {
     pr_.resize(np_);
     pc_ref_.resize(np_);
     pr_ref_.resize(np_);
-    built_ = false;
-    rebuilds_ = 0;
     count_.resize(1);
     vcnt_.resize(nv_ + 1);
     vcur_.resize(nv_);
+    // A fresh start: no pair list, history or counters of an earlier model.
+    pairs_.clear();
     n_prev_ = 0;
+    built_ = false;
+    timed_ = false;
+    skin_ = 0;
+    rebuilds_ = 0;
+    steps_ = 0;
+    stats_ = {};
+    max_overlap_ever_ = 0;
+    dissipated_ = 0;
+    timers_.clear();
   }
 
   // The contact records at positions x and velocities v: pairs, records, the force law, the
@@ -1105,6 +1122,7 @@ class ContactStage {
   Buffer<double> pen_val_{S};
   std::int64_t steps_ = 0;
   PhaseTimers timers_;
+  StagingBytes stage_;  // host side of the upload (write_on_host)
 };
 
 }  // namespace qdemsph

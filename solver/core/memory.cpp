@@ -5,6 +5,8 @@
 #include <new>
 #include <stdexcept>
 
+#include "core/exec_host.hpp"
+
 namespace qdemsph {
 
 #ifndef QDEMSPH_HAVE_CUDA
@@ -115,14 +117,21 @@ void space_zero(Space s, void* p, std::size_t bytes) {
     std::memset(p, 0, bytes);
 }
 
+// Component by component, in parallel: in place on the host, through one host array for a
+// device.
 void Vec3Buffer::assign(const std::vector<Vec3>& h) {
-  std::vector<double> c(h.size());
-  for (std::size_t i = 0; i < h.size(); ++i) c[i] = h[i].x;
-  x_.assign(c);
-  for (std::size_t i = 0; i < h.size(); ++i) c[i] = h[i].y;
-  y_.assign(c);
-  for (std::size_t i = 0; i < h.size(); ++i) c[i] = h[i].z;
-  z_.assign(c);
+  const auto n = static_cast<std::int64_t>(h.size());
+  const bool host = x_.space() == Space::Host;
+  std::vector<double> c(host ? 0 : n);
+  Buffer<double>* comp[3] = {&x_, &y_, &z_};
+  constexpr double Vec3::*member[3] = {&Vec3::x, &Vec3::y, &Vec3::z};
+  for (int a = 0; a < 3; ++a) {
+    if (host) comp[a]->resize_for_overwrite(n);
+    double* out = host ? comp[a]->view().p : c.data();
+    const double Vec3::*m = member[a];
+    for_each(HostExec{}, n, [&](std::int64_t i) { out[i] = h[i].*m; });
+    if (!host) comp[a]->assign(c);
+  }
 }
 
 std::vector<Vec3> Vec3Buffer::to_host() const {

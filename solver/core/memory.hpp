@@ -63,6 +63,11 @@ struct View {
   QDEMSPH_HD std::int64_t size() const { return n; }
 };
 
+// The allocation grows only: a resize or assign to a size within the capacity keeps it (no
+// free and allocate; on CUDA no cudaFree, which would wait for the device), so rebuilding a
+// model of about the same size reuses its memory, and view() keeps its pointer until a size
+// beyond the capacity. A buffer outgrowing an earlier allocation takes 1/8 more room, so a size
+// creeping up reallocates rarely. Only the destructor (or moving another buffer in) frees.
 template <class T>
 class Buffer {
   static_assert(std::is_trivially_copyable_v<T>);
@@ -83,20 +88,31 @@ class Buffer {
     std::swap(space_, o.space_);
     std::swap(p_, o.p_);
     std::swap(n_, o.n_);
+    std::swap(cap_, o.cap_);
   }
-  // Discards the contents; the new array is zero-filled.
+  // Discards the contents; the n elements are zero-filled.
   void resize(std::int64_t n) {
-    space_free(space_, p_);
-    p_ = nullptr;
-    n_ = n;
-    if (n > 0) {
-      p_ = static_cast<T*>(space_alloc(space_, sizeof(T) * n));
-      space_zero(space_, p_, sizeof(T) * n);
+    resize_for_overwrite(n);
+    zero();
+  }
+  // Size n, contents unspecified (earlier values or fresh memory): for a caller that writes
+  // every element next.
+  void resize_for_overwrite(std::int64_t n) {
+    if (n > cap_) {
+      const std::int64_t want = cap_ > 0 ? n + n / 8 : n;
+      space_free(space_, p_);
+      p_ = nullptr, n_ = 0, cap_ = 0;  // consistent should the allocation throw
+      p_ = static_cast<T*>(space_alloc(space_, sizeof(T) * want));
+      cap_ = want;
     }
+    n_ = n;
+  }
+  void assign(const T* host, std::int64_t n) {
+    resize_for_overwrite(n);
+    if (n_ > 0) space_copy(p_, space_, host, Space::Host, sizeof(T) * n_);
   }
   void assign(const std::vector<T>& host) {
-    if (static_cast<std::int64_t>(host.size()) != n_) resize(host.size());
-    if (n_ > 0) space_copy(p_, space_, host.data(), Space::Host, sizeof(T) * n_);
+    assign(host.data(), static_cast<std::int64_t>(host.size()));
   }
   std::vector<T> to_host() const {
     std::vector<T> h(n_);
@@ -110,13 +126,14 @@ class Buffer {
   View<const T> view() const { return {p_, n_}; }
   View<const T> cview() const { return {p_, n_}; }
   std::int64_t size() const { return n_; }
+  std::int64_t capacity() const { return cap_; }
   Space space() const { return space_; }
-  std::size_t bytes() const { return sizeof(T) * n_; }
+  std::size_t bytes() const { return sizeof(T) * cap_; }  // the allocation's
 
  private:
   Space space_ = Space::Host;
   T* p_ = nullptr;
-  std::int64_t n_ = 0;
+  std::int64_t n_ = 0, cap_ = 0;
 };
 
 // A field of 3-vectors stored as three component arrays (SoA) so that consecutive threads
@@ -195,5 +212,22 @@ class StagingBytes {
   std::size_t size_ = 0, cap_ = 0;
   bool pinned_ = false;
 };
+
+// A buffer's n elements computed on the host (a model's upload): write(out) stores them into
+// out[0, n), typically in a for_each(HostExec{}, ...). A host buffer is written in place, a
+// device one through `stage`, which the caller keeps: the next upload reuses its pages, and on a
+// GPU rank they are page-locked (the copy runs at the link's speed).
+template <class T, class Write>
+void write_on_host(Buffer<T>& b, std::int64_t n, StagingBytes& stage, Write write) {
+  if (b.space() == Space::Host) {
+    b.resize_for_overwrite(n);
+    write(b.view().p);
+    return;
+  }
+  stage.resize(sizeof(T) * n);
+  T* out = reinterpret_cast<T*>(stage.data());
+  write(out);
+  b.assign(out, n);
+}
 
 }  // namespace qdemsph

@@ -11,11 +11,14 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <numeric>
 
 #include "contact/contact_stage.hpp"
 #include "core/error.hpp"
 #include "core/error_flag.hpp"
+#include "core/exec_host.hpp"
 #include "core/memory.hpp"
 #include "integrate/backend.hpp"
 #include "physics/element.hpp"
@@ -47,53 +50,70 @@ class QdemBackend final : public Backend {
     mass_.assign(m.mass);
     inv_mass_.assign(m.inv_mass);
     relax_inv_mass_.assign(m.relax_inv_mass);
-    std::vector<std::uint8_t> held(nv_);
-    for (std::int64_t i = 0; i < nv_; ++i) held[i] = held_components(m.flags[i]);
-    held_.assign(held);
+    const std::int64_t nv = nv_, nt = nt_;
+    write_on_host(held_, nv, stage_, [&](std::uint8_t* held) {
+      for_each(HostExec{}, nv, [&](std::int64_t i) { held[i] = held_components(m.flags[i]); });
+    });
     x0_.resize(nv_);  // relaxation start state (mark_relax_start)
     f0_.resize(nv_);
     diss_v_.resize(nv_);
-    std::vector<std::int32_t> tv(4 * nt_);
-    std::vector<double> dxi(9 * nt_);
-    for (std::int64_t t = 0; t < nt_; ++t) {
-      for (int k = 0; k < 4; ++k) tv[k * nt_ + t] = m.tets[t][k];
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) dxi[(3 * r + c) * nt_ + t] = m.dX_inv[t].m[r][c];
-    }
-    tv_.assign(tv);
-    dxi_.assign(dxi);
+    write_on_host(tv_, 4 * nt, stage_, [&](std::int32_t* tv) {
+      for_each(HostExec{}, nt, [&](std::int64_t t) {
+        for (int k = 0; k < 4; ++k) tv[k * nt + t] = m.tets[t][k];
+      });
+    });
+    write_on_host(dxi_, 9 * nt, stage_, [&](double* dxi) {
+      for_each(HostExec{}, nt, [&](std::int64_t t) {
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) dxi[(3 * r + c) * nt + t] = m.dX_inv[t].m[r][c];
+      });
+    });
     vol0_.assign(m.vol0);
     tmat_.assign(m.tet_material);
     mats_.assign(m.materials);
     tf_.resize(4 * nt_);
     diss_t_.resize(nt_);
-    // Vertex -> (corner k, tet t) list, entries k * nt + t, ordered by (k, global tet id):
-    // on one rank that is increasing order; a rank of a distributed run sums the corners of
-    // its vertices in the same order, so forces agree with one rank bit for bit.
-    std::vector<std::int64_t> off(nv_ + 1, 0);
-    for (std::int64_t t = 0; t < nft_; ++t)
-      for (int k = 0; k < 4; ++k) ++off[m.tets[t][k] + 1];
-    for (std::int64_t i = 0; i < nv_; ++i) off[i + 1] += off[i];
-    std::vector<std::int64_t> ent(off[nv_]), fill(off.begin(), off.end() - 1);
-    for (int k = 0; k < 4; ++k)
-      for (std::int64_t t = 0; t < nft_; ++t) ent[fill[m.tets[t][k]]++] = k * nt_ + t;
-    // (A model without tet ids, e.g. a benchmark's, is numbered by index.)
-    const std::int64_t ntt = nt_;
-    const bool gids = static_cast<std::int64_t>(m.tet_gid.size()) == nt_;
-    auto by_gid = [&](std::int64_t a, std::int64_t b) {
-      if (a / ntt != b / ntt || !gids) return a < b;
-      return m.tet_gid[a % ntt] < m.tet_gid[b % ntt];
-    };
-    for (std::int64_t i = 0; i < nv_; ++i)
-      std::sort(ent.begin() + off[i], ent.begin() + off[i + 1], by_gid);
-    csr_off_.assign(off);
-    csr_ent_.assign(ent);
+    upload_corner_lists(m);
     flag_.resize(1);
-    contact_.reset();
-    if (m.contact.enabled) {
-      contact_ = std::make_unique<ContactStage<Exec>>();
-      contact_->upload(m);
+    if (!m.contact.enabled) {
+      contact_.reset();
+    } else {
+      if (!contact_) contact_ = std::make_unique<ContactStage<Exec>>();
+      contact_->upload(m);  // a re-upload keeps the stage's storage
     }
+  }
+
+  // Vertex -> (corner k, tet t) list, entries k * nt + t, ordered by (k, global tet id): on one
+  // rank that is increasing order; a rank of a distributed run sums the corners of its vertices
+  // in the same order, so forces agree with one rank bit for bit. Built in parallel: counted and
+  // filled through atomic cursors (in any order), then each vertex's entries sorted (unique
+  // keys: the lists do not depend on the threads). (A model without tet ids, e.g. a benchmark's,
+  // is numbered by index.)
+  void upload_corner_lists(const Model& m) {
+    const std::int64_t nv = nv_, nt = nt_, nft = nft_;
+    std::vector<std::int64_t>& off = csr_off_h_;
+    off.assign(nv + 1, 0);
+    auto next = [](std::int64_t& c) {
+      return std::atomic_ref<std::int64_t>(c).fetch_add(1, std::memory_order_relaxed);
+    };
+    for_each(HostExec{}, nft, [&](std::int64_t t) {
+      for (int k = 0; k < 4; ++k) next(off[m.tets[t][k] + 1]);
+    });
+    std::partial_sum(off.begin(), off.end(), off.begin());
+    const bool gids = static_cast<std::int64_t>(m.tet_gid.size()) == nt;
+    auto before = [&](std::int64_t a, std::int64_t b) {
+      if (a / nt != b / nt || !gids) return a < b;
+      return m.tet_gid[a % nt] < m.tet_gid[b % nt];
+    };
+    write_on_host(csr_ent_, off[nv], stage_, [&](std::int64_t* ent) {
+      std::vector<std::int64_t> cur(off.begin(), off.end() - 1);
+      for (int k = 0; k < 4; ++k)  // corner by corner: the lists come nearly sorted
+        for_each(HostExec{}, nft,
+                 [&](std::int64_t t) { ent[next(cur[m.tets[t][k]])] = k * nt + t; });
+      for_each(HostExec{}, nv,
+               [&](std::int64_t i) { std::sort(ent + off[i], ent + off[i + 1], before); });
+    });
+    csr_off_.assign(off);
   }
 
   void use_preload(bool on) override { preload_ = on; }
@@ -541,6 +561,8 @@ class QdemBackend final : public Backend {
   Buffer<std::uint8_t> held_{S};  // per vertex: held components (bits x, y, z)
   Buffer<Material> mats_{S};
   Buffer<std::int64_t> csr_off_{S}, csr_ent_{S};
+  std::vector<std::int64_t> csr_off_h_;  // the corner lists' offsets as built on the host
+  StagingBytes stage_;                   // host side of the uploads (write_on_host)
   Buffer<unsigned long long> flag_{S};
   // Distributed runs only (empty otherwise): halo send list and staging, moved-reference.
   Buffer<std::int64_t> halo_send_{S};

@@ -76,6 +76,7 @@ class CandidatePairs {
   View<const int> second() const { return {second_.cview().p, total_}; }
   View<const int> first() const { return {first_.cview().p, total_}; }
   std::int64_t size() const { return total_; }
+  void clear() { n_ = total_ = 0; }  // no pairs; the storage stays
   std::size_t bytes() const { return start_.bytes() + second_.bytes() + first_.bytes(); }
 
  private:

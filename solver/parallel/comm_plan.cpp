@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/exec_host.hpp"
+
 namespace qdemsph {
 
 namespace {
@@ -208,14 +210,14 @@ void CommEngine::begin(std::span<const CommField> src, Dir dir) {
   const std::vector<std::int64_t>& so = fwd ? send_off_ : recv_off_;
   check_fields(src, fwd ? n_items_ : recv_base_ + n_recv(), "source");
   sendbuf_.resize(stride_ * so[size_]);
-  // Pack, item-major. Bytes: stride per slot each way.
+  // Pack, item-major, slots in parallel. Bytes: stride per slot each way.
   const std::int64_t ns = so[size_];
   std::size_t off = 0;
   for (const CommField& f : src) {
-    for (std::int64_t k = 0; k < ns; ++k) {
+    for_each(HostExec{}, ns, [&](std::int64_t k) {
       const std::int64_t item = fwd ? send_index_[k] : recv_base_ + k;
       std::memcpy(&sendbuf_[k * stride_ + off], f.data + item * f.elem, f.elem);
-    }
+    });
     off += f.elem;
   }
   seconds_.pack += MPI_Wtime() - t0;
@@ -306,9 +308,10 @@ void CommEngine::finish(std::span<const CommField> dst, Dir dir) {
   std::size_t off = 0;
   if (fwd) {
     const std::int64_t nr = n_recv();
-    for (const CommField& f : dst) {
-      for (std::int64_t k = 0; k < nr; ++k)
+    for (const CommField& f : dst) {  // slots in parallel
+      for_each(HostExec{}, nr, [&](std::int64_t k) {
         std::memcpy(f.data + (recv_base_ + k) * f.elem, &recvbuf_[k * stride_ + off], f.elem);
+      });
       off += f.elem;
     }
   } else {

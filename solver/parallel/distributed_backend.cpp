@@ -1,6 +1,7 @@
 #include "parallel/distributed_backend.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -10,6 +11,8 @@
 
 #include "core/error.hpp"
 #include "core/exec_host.hpp"
+#include "core/parallel_sort.hpp"
+#include "core/select_host.hpp"
 #include "core/timers.hpp"
 #include "parallel/balance.hpp"
 #include "parallel/band_cells.hpp"
@@ -579,11 +582,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   StateSlice export_state() override {
     StateSlice s;
     const BackendState st = local_->save_state();
-    for (std::int64_t i = 0; i < L_.n_owned; ++i) s.add_vertex(L_.vertices[i], st, i, relaxing_);
-    for (std::int64_t j = 0; j < L_.n_home; ++j) {
-      s.tet.push_back(L_.tets[j]);
-      s.diss_t.push_back(st.diss_t[j]);
-    }
+    s.set_vertices(owned_vertices(), st, 0, relaxing_);
+    s.tet = home_tets();
+    s.diss_t.assign(st.diss_t.begin(), st.diss_t.begin() + L_.n_home);
     // Each history entry once: a rank holds the history of the records it evaluates only
     // (those anchored at its owned vertices, contact_record.hpp anchor_slot).
     if (!st.contact) return s;
@@ -673,12 +674,14 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     if (coupled_) cfc_.assign(w.fc.empty() ? std::vector<Vec3>(nv) : w.fc);
     StateSlice s;
     const std::int64_t nfv = g.n_free_vertices, nft = g.n_free_tets;
-    for (std::int64_t i = nfv * me_ / np_; i < nfv * (me_ + 1) / np_; ++i)
-      s.add_vertex(i, w, i, relax);
-    for (std::int64_t t = nft * me_ / np_; t < nft * (me_ + 1) / np_; ++t) {
-      s.tet.push_back(t);
-      s.diss_t.push_back(w.diss_t[t]);
-    }
+    const std::int64_t v0 = nfv * me_ / np_, v1 = nfv * (me_ + 1) / np_;
+    const std::int64_t t0 = nft * me_ / np_, t1 = nft * (me_ + 1) / np_;
+    std::vector<std::int64_t> ids(v1 - v0);
+    std::iota(ids.begin(), ids.end(), v0);
+    s.set_vertices(std::move(ids), w, v0, relax);
+    s.tet.resize(t1 - t0);
+    std::iota(s.tet.begin(), s.tet.end(), t0);
+    s.diss_t.assign(w.diss_t.begin() + t0, w.diss_t.begin() + t1);
     if (contact_) {
       const ContactState& c = *w.contact;
       const std::int64_t ne = static_cast<std::int64_t>(c.size());
@@ -904,13 +907,13 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     std::optional<PhaseTimers::Scope> part;
     part.emplace(timers_, "migration.state");
     std::int64_t bytes = 0;
-    // New owners; every rank learns the changes (owner_ covers all free vertices).
+    // New owners (a curve key each, in parallel); every rank learns the changes (owner_ covers
+    // all free vertices).
     std::vector<int> dest(nsv);
+    for_each(HostExec{}, nsv, [&](std::int64_t k) { dest[k] = dec_.owner(s.x[k]); });
     std::vector<std::pair<std::int64_t, std::int64_t>> changed;
-    for (std::int64_t k = 0; k < nsv; ++k) {
-      dest[k] = dec_.owner(s.x[k]);
+    for (std::int64_t k = 0; k < nsv; ++k)
       if (owner_[s.vertex[k]] != dest[k]) changed.push_back({s.vertex[k], dest[k]});
-    }
     const auto all_changed = allgatherv(comm_, changed, &bytes);
     for (const auto& [gv, r] : all_changed) owner_[gv] = static_cast<std::int32_t>(r);
     if (all_changed.empty() && !always) {
@@ -931,10 +934,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     std::vector<double> dv(nn);
     std::vector<CommField> src{cfield(s.x), cfield(s.v), cfield(s.diss_v)},
         dst{cfield(x), cfield(v), cfield(dv)};
-    const std::vector<Vec3> zeros(nsv);
+    std::vector<Vec3> zeros;  // made only when some field is missing here
     auto optional_field = [&](bool any_rank, const std::vector<Vec3>& from, std::vector<Vec3>& to) {
       if (!any_rank) return;
       to.resize(nn);
+      if (from.empty()) zeros.resize(nsv);
       src.push_back(cfield(from.empty() ? zeros : from));
       dst.push_back(cfield(to));
     };
@@ -945,18 +949,27 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     mv.finish(dst);
     bytes += mv.engine().last_bytes();
 
-    // Tets: from their holder to every new owner of one of their vertices.
+    // Tets: from their holder to every new owner of one of their vertices (each tet's ranks
+    // sorted, without repeats; counted, then written, in parallel).
     const std::int64_t nst = static_cast<std::int64_t>(s.tet.size());
-    std::vector<std::int64_t> toff{0};
-    std::vector<int> tranks;
-    for (std::int64_t k = 0; k < nst; ++k) {
+    auto tet_ranks = [&](std::int64_t k, int* r) {
       const auto& tv = g_->tets[s.tet[k]];
-      const std::size_t first = tranks.size();
-      for (int q = 0; q < 4; ++q) tranks.push_back(owner_[tv[q]]);
-      std::sort(tranks.begin() + first, tranks.end());
-      tranks.erase(std::unique(tranks.begin() + first, tranks.end()), tranks.end());
-      toff.push_back(static_cast<std::int64_t>(tranks.size()));
-    }
+      for (int q = 0; q < 4; ++q) r[q] = owner_[tv[q]];
+      std::sort(r, r + 4);
+      return static_cast<std::int64_t>(std::unique(r, r + 4) - r);
+    };
+    std::vector<std::int64_t> toff(nst + 1, 0);
+    for_each(HostExec{}, nst, [&](std::int64_t k) {
+      int r[4];
+      toff[k + 1] = tet_ranks(k, r);
+    });
+    std::partial_sum(toff.begin(), toff.end(), toff.begin());
+    std::vector<int> tranks(toff[nst]);
+    for_each(HostExec{}, nst, [&](std::int64_t k) {
+      int r[4];
+      const std::int64_t n = tet_ranks(k, r);
+      std::copy(r, r + n, tranks.begin() + toff[k]);
+    });
     CommEngine te(comm_, toff, tranks, 0);
     std::vector<std::int64_t> tg(te.n_recv());
     std::vector<double> td(te.n_recv());
@@ -997,37 +1010,28 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
     migrated_bytes_ += bytes;
 
-    // The new owned vertices in gid order, so a rank's layout depends only on what it owns.
-    std::vector<std::int64_t> perm(nn);
-    std::iota(perm.begin(), perm.end(), std::int64_t{0});
-    const auto& ng = mv.new_gids();
-    std::sort(perm.begin(), perm.end(), [&](auto a, auto b) { return ng[a] < ng[b]; });
+    // The new owned vertices in gid order, so a rank's layout depends only on what it owns
+    // (sorted and gathered in parallel); the tets as they came.
     StateSlice mine;
-    for (std::int64_t k : perm) {
-      mine.vertex.push_back(static_cast<std::int64_t>(ng[k]));
-      mine.x.push_back(x[k]);
-      mine.v.push_back(v[k]);
-      if (any_f) mine.f.push_back(f[k]);
-      mine.diss_v.push_back(dv[k]);
-      if (any_relax) {
-        mine.x0.push_back(x0[k]);
-        mine.f0.push_back(f0[k]);
-      }
+    const std::vector<std::int64_t> perm = sorted_order(mv.new_gids());
+    mine.vertex = gathered<std::int64_t>(mv.new_gids(), perm);
+    mine.x = gathered<Vec3>(x, perm);
+    mine.v = gathered<Vec3>(v, perm);
+    if (any_f) mine.f = gathered<Vec3>(f, perm);
+    mine.diss_v = gathered<double>(dv, perm);
+    if (any_relax) {
+      mine.x0 = gathered<Vec3>(x0, perm);
+      mine.f0 = gathered<Vec3>(f0, perm);
     }
-    std::vector<std::int64_t> tperm(tg.size());
-    std::iota(tperm.begin(), tperm.end(), std::int64_t{0});
-    std::sort(tperm.begin(), tperm.end(), [&](auto a, auto b) { return tg[a] < tg[b]; });
-    for (std::int64_t k : tperm) {
-      mine.tet.push_back(tg[k]);
-      mine.diss_t.push_back(td[k]);
-    }
+    mine.tet = std::move(tg);
+    mine.diss_t = std::move(td);
     mine.contact = std::move(hist);
     part.reset();
     install(mine);
   }
 
   // Builds the rank's part from its owned state (vertices in gid order, the state of every
-  // tet it will hold, its contact history) and uploads it.
+  // tet it will hold in any order, its contact history) and uploads it.
   void install(const StateSlice& s) {
     std::optional<PhaseTimers::Scope> part;
     part.emplace(timers_, "migration.layout");
@@ -1037,7 +1041,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     L.n_owned = static_cast<std::int64_t>(s.vertex.size());
     // Held tets: every free tet with an owned vertex (the owned vertices are those owner_
     // gives this rank), in id order; interior, boundary home, halo. Each tet's class is
-    // decided in parallel, the lists are collected in order.
+    // decided in parallel, then the tets are bucketed by class (in parallel too).
     std::vector<std::uint8_t> cls(g.n_free_tets);
     enum : std::uint8_t { kInterior, kBoundary, kHalo, kNotHeld };
     for_each(HostExec{}, g.n_free_tets, [&](std::int64_t t) {
@@ -1049,18 +1053,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
                : owned > 0                                              ? kHalo
                                                                         : kNotHeld;
     });
-    std::vector<std::int64_t> boundary, halo;
-    for (std::int64_t t = 0; t < g.n_free_tets; ++t)
-      if (cls[t] == kInterior)
-        L.tets.push_back(t);
-      else if (cls[t] == kBoundary)
-        boundary.push_back(t);
-      else if (cls[t] == kHalo)
-        halo.push_back(t);
-    L.n_interior = static_cast<std::int64_t>(L.tets.size());
-    L.tets.insert(L.tets.end(), boundary.begin(), boundary.end());
-    L.n_home = static_cast<std::int64_t>(L.tets.size());
-    L.tets.insert(L.tets.end(), halo.begin(), halo.end());
+    Buckets held =
+        bucket_indices(HostExec{}, g.n_free_tets, kNotHeld, [&](std::int64_t t) { return cls[t]; });
+    L.tets = std::move(held.index);
+    L.n_interior = held.start[kBoundary];
+    L.n_home = held.start[kHalo];
 
     // Contact band: the cells holding this rank's owned contact vertices, published to all.
     std::unordered_map<std::uint64_t, std::vector<int>> occupied;  // cell -> other ranks
@@ -1163,7 +1160,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       x.push_back(g.x[L.vertices[i]]);
       v.push_back(g.v[L.vertices[i]]);
     }
-    LocalModel lm = build_local_model(g, ix_, L, x, v);
+    build_local_model(g, ix_, L, x, v, lm_);
     part.reset();
     part.emplace(timers_, "migration.upload");
 
@@ -1174,11 +1171,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       overlap_acc_ = std::max(overlap_acc_, c["max_overlap_ever"]);
       rebuilds_acc_ += c["pair_rebuilds"];
     }
-    local_->upload(lm.model);
+    local_->upload(lm_.model);
     local_->use_preload(preload_);
     BackendState st;
-    st.x = lm.model.x;
-    st.v = lm.model.v;
+    st.x = lm_.model.x;
+    st.v = lm_.model.v;
     st.f.assign(nv, Vec3{});  // empty in the slice: the next compute_forces evaluates them
     std::copy(s.f.begin(), s.f.end(), st.f.begin());
     st.diss_v.assign(nv, 0.0);
@@ -1189,26 +1186,39 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       std::copy(s.x0.begin(), s.x0.end(), st.x0.begin());
       std::copy(s.f0.begin(), s.f0.end(), st.f0.begin());
     }
+    // Each held tet's dissipation from its slot in the slice, found by gid in tet_slot_ (its
+    // entries of tets the slice lacks are stale, so a hit is checked).
+    const auto nst = static_cast<std::int64_t>(s.tet.size());
+    tet_slot_.resize(g.n_free_tets);
+    for_each(HostExec{}, nst,
+             [&](std::int64_t k) { tet_slot_[s.tet[k]] = static_cast<std::int32_t>(k); });
     st.diss_t.resize(L.tets.size());
-    for (std::size_t j = 0; j < L.tets.size(); ++j) {
-      const auto it = std::lower_bound(s.tet.begin(), s.tet.end(), L.tets[j]);
-      if (it == s.tet.end() || *it != L.tets[j])
-        throw std::logic_error("distributed install: no state arrived for tet " +
-                               std::to_string(L.tets[j]));
-      st.diss_t[j] = s.diss_t[it - s.tet.begin()];
-    }
+    std::atomic<std::int64_t> missing{-1};  // a held tet whose state did not arrive
+    for_each(HostExec{}, static_cast<std::int64_t>(L.tets.size()), [&](std::int64_t j) {
+      const std::int64_t k = tet_slot_[L.tets[j]];
+      if (k < nst && s.tet[k] == L.tets[j])
+        st.diss_t[j] = s.diss_t[k];
+      else
+        missing.store(L.tets[j], std::memory_order_relaxed);
+    });
+    if (missing >= 0)
+      throw std::logic_error("distributed install: no state arrived for tet " +
+                             std::to_string(missing));
     // Contact history in this rank's feature ids and vertex indices, sorted by key (no
     // pair-list reference: the list is built for this layout at the next step).
     if (contact_) {
       const ContactState& sc = s.contact;
+      const auto nsc = static_cast<std::int64_t>(sc.size());
+      std::vector<std::pair<std::uint64_t, std::uint64_t>> lk(nsc);
+      for_each(HostExec{}, nsc, [&](std::int64_t e) {
+        lk[e] = {lm_.ids.k1_to_local(sc.k1[e]), FeatureIds::kNone};
+        if (lk[e].first != FeatureIds::kNone)
+          lk[e].second = lm_.ids.k2_to_local(sc.k1[e], sc.k2[e]);
+      });
       std::vector<std::size_t> hidx;
-      std::vector<std::pair<std::uint64_t, std::uint64_t>> lk(sc.size());
-      for (std::size_t e = 0; e < sc.size(); ++e) {
-        lk[e] = {lm.ids.k1_to_local(sc.k1[e]), FeatureIds::kNone};
-        if (lk[e].first != FeatureIds::kNone) lk[e].second = lm.ids.k2_to_local(sc.k1[e], sc.k2[e]);
+      for (std::int64_t e = 0; e < nsc; ++e)
         if (lk[e].first != FeatureIds::kNone && lk[e].second != FeatureIds::kNone)
           hidx.push_back(e);
-      }
       std::sort(hidx.begin(), hidx.end(), [&](auto a, auto b) { return lk[a] < lk[b]; });
       hidx.erase(
           std::unique(hidx.begin(), hidx.end(), [&](auto a, auto b) { return lk[a] == lk[b]; }),
@@ -1220,7 +1230,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
         c.k1.back() = lk[e].first;
         c.k2.back() = lk[e].second;
         for (int q = 0; q < 4; ++q)
-          if (sc.v[e][q] >= 0) c.v.back()[q] = lm.ids.local_vertex(sc.v[e][q]);
+          if (sc.v[e][q] >= 0) c.v.back()[q] = lm_.ids.local_vertex(sc.v[e][q]);
       }
     }
     local_->load_state(st);
@@ -1228,7 +1238,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     local_->set_halo(halo_->engine().send_index(), L.n_owned, halo_->n_ghost());
     local_->mark_positions();
     L_ = std::move(L);
-    ids_ = std::move(lm.ids);
+    std::swap(ids_, lm_.ids);  // the old ids' storage serves the next rebuild
     if (coupled_) install_coupling();
     ++rebuilds_;
   }
@@ -1279,6 +1289,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   Decomposition dec_;
   LocalLayout L_;
   FeatureIds ids_;
+  LocalModel lm_;  // the last layout's model, its storage reused by the next (install)
+  std::vector<std::int32_t> tet_slot_;  // per free tet: its slot in install's slice (or stale)
   std::unique_ptr<HaloPlan> halo_;
   bool contact_ = false, preload_ = false, relaxing_ = false;
   double band_ = 1, slack_ = 0;

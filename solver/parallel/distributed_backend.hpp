@@ -79,17 +79,20 @@ struct StateSlice {
   // layout).
   ContactState contact;
 
-  // Appends free vertex `id` with entry i of a backend state (its x0, f0 when relaxing).
-  void add_vertex(std::int64_t id, const BackendState& st, std::int64_t i, bool relaxing) {
-    vertex.push_back(id);
-    x.push_back(st.x[i]);
-    v.push_back(st.v[i]);
-    f.push_back(st.f[i]);
-    diss_v.push_back(st.diss_v[i]);
-    if (relaxing) {
-      x0.push_back(st.x0[i]);
-      f0.push_back(st.f0[i]);
-    }
+  // The free vertices `ids`, with entries first, first + 1, ... of a backend state (their x0,
+  // f0 when relaxing).
+  void set_vertices(std::vector<std::int64_t> ids, const BackendState& st, std::int64_t first,
+                    bool relaxing) {
+    const auto part = [&](const auto& a) {
+      return std::vector(a.begin() + first, a.begin() + first + ids.size());
+    };
+    x = part(st.x);
+    v = part(st.v);
+    f = part(st.f);
+    diss_v = part(st.diss_v);
+    x0 = relaxing ? part(st.x0) : std::vector<Vec3>{};
+    f0 = relaxing ? part(st.f0) : std::vector<Vec3>{};
+    vertex = std::move(ids);
   }
 };
 

@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <atomic>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
 #include "contact/contact_record.hpp"
 #include "core/exec_host.hpp"
+#include "core/parallel_sort.hpp"
+#include "core/select_host.hpp"
 
 namespace qdemsph {
 
@@ -76,10 +79,10 @@ ModelIndex index_model(const Model& g) {
 }
 
 void FeatureIds::finish() {
-  vertex_inv_.resize(vertex.size());
-  for (std::size_t i = 0; i < vertex.size(); ++i)
-    vertex_inv_[i] = {vertex[i], static_cast<std::int64_t>(i)};
-  std::sort(vertex_inv_.begin(), vertex_inv_.end());
+  const auto n = static_cast<std::int64_t>(vertex.size());
+  vertex_inv_.resize(n);
+  for_each(HostExec{}, n, [&](std::int64_t i) { vertex_inv_[i] = {vertex[i], i}; });
+  parallel_sort(vertex_inv_.begin(), vertex_inv_.end());  // unique global ids
 }
 
 std::int64_t FeatureIds::local_vertex(std::int64_t gid) const {
@@ -143,10 +146,18 @@ ContactShare FeatureIds::to_local(ContactShare s) const {
 LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& L,
                              const std::vector<Vec3>& x, const std::vector<Vec3>& v,
                              bool with_contact) {
+  LocalModel out;
+  build_local_model(g, ix, L, x, v, out, with_contact);
+  return out;
+}
+
+// Every array of `out` is overwritten whole (resized, then written), never appended to.
+void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& L,
+                       const std::vector<Vec3>& x, const std::vector<Vec3>& v, LocalModel& out,
+                       bool with_contact) {
   const std::int64_t nv = static_cast<std::int64_t>(L.vertices.size());
   if (static_cast<std::int64_t>(x.size()) != nv || static_cast<std::int64_t>(v.size()) != nv)
     throw std::invalid_argument("build_local_model: x and v need one entry per listed vertex");
-  LocalModel out;
   Model& m = out.model;
   std::vector<std::int32_t> g2l(g.n_vertices(), -1);
   for (std::int64_t i = 0; i < nv; ++i) g2l[L.vertices[i]] = static_cast<std::int32_t>(i);
@@ -203,12 +214,17 @@ LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLa
 
   const ContactModel& gc = g.contact;
   ContactModel& c = m.contact;
+  if (!with_contact || !gc.enabled) {
+    c = ContactModel{};
+    c.mode = gc.mode;
+    c.n_surface_tets = gc.n_surface_tets;
+    out.ids.triangle.clear();
+    out.ids.edge.clear();
+    out.ids.finish();
+    return;
+  }
   c.mode = gc.mode;
   c.n_surface_tets = gc.n_surface_tets;
-  if (!with_contact || !gc.enabled) {
-    out.ids.finish();
-    return out;
-  }
   c.enabled = true;
   c.d_dem = gc.d_dem;
   c.self_contact = gc.self_contact;
@@ -235,69 +251,97 @@ LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLa
     for (int k = 0; k < 4; ++k) all = all && (gc.prim_v[p][k] < 0 || g2l[gc.prim_v[p][k]] >= 0);
     keep[p] = all;
   });
-  std::vector<std::int32_t> prims;
-  for (std::int64_t p = 0; p < ngp; ++p)
-    if (keep[p]) prims.push_back(static_cast<std::int32_t>(p));
+  const std::vector<std::int64_t> prims =
+      select_indices(HostExec{}, ngp, [&](std::int64_t p) { return keep[p] != 0; });
+  const auto npl = static_cast<std::int64_t>(prims.size());
   // Their triangles and the triangles' edges, in global order (marked, then collected), and
   // global -> local numbers (-1: not held).
+  auto mark = [](std::int32_t& m) {
+    std::atomic_ref<std::int32_t>(m).store(1, std::memory_order_relaxed);
+  };
   auto collect = [](std::vector<std::int32_t>& marks, std::vector<std::int64_t>& out) {
-    for (std::size_t e = 0; e < marks.size(); ++e) {
-      if (!marks[e]) {
-        marks[e] = -1;
-        continue;
-      }
-      marks[e] = static_cast<std::int32_t>(out.size());
-      out.push_back(static_cast<std::int64_t>(e));
-    }
+    const auto n = static_cast<std::int64_t>(marks.size());
+    out = select_indices(HostExec{}, n, [&](std::int64_t e) { return marks[e] != 0; });
+    for_each(HostExec{}, n, [&](std::int64_t e) { marks[e] = -1; });
+    for_each(HostExec{}, static_cast<std::int64_t>(out.size()),
+             [&](std::int64_t j) { marks[out[j]] = static_cast<std::int32_t>(j); });
   };
   std::vector<std::int64_t>& tris = out.ids.triangle;
   std::vector<std::int32_t> tri_l(gc.tri_v.size(), 0);
-  for (std::int32_t p : prims)
-    for (std::int64_t q = gc.prim_tri_off[p]; q < gc.prim_tri_off[p + 1]; ++q)
-      tri_l[gc.prim_tri[q]] = 1;
+  for_each(HostExec{}, npl, [&](std::int64_t j) {
+    for (std::int64_t q = gc.prim_tri_off[prims[j]]; q < gc.prim_tri_off[prims[j] + 1]; ++q)
+      mark(tri_l[gc.prim_tri[q]]);
+  });
   collect(tri_l, tris);
+  const auto ntl = static_cast<std::int64_t>(tris.size());
   std::vector<std::int64_t>& edges = out.ids.edge;
   std::vector<std::int32_t> edge_l(gc.edges.size(), 0);
-  for (std::int64_t s : tris)
-    for (int q = 0; q < 3; ++q) edge_l[ix.tri_edges[s][q]] = 1;
+  for_each(HostExec{}, ntl, [&](std::int64_t j) {
+    for (int q = 0; q < 3; ++q) mark(edge_l[ix.tri_edges[tris[j]][q]]);
+  });
   collect(edge_l, edges);
-  c.own_v_off.push_back(0);
-  c.own_e_off.push_back(0);
-  for (std::int64_t s : tris) {
-    c.tri_v.push_back({local(gc.tri_v[s][0]), local(gc.tri_v[s][1]), local(gc.tri_v[s][2])});
-    c.tri_body.push_back(gc.tri_body[s]);
+  const auto nel = static_cast<std::int64_t>(edges.size());
+  // The local lists, written in parallel (CSR offsets first).
+  auto offsets = [](std::int64_t n, std::vector<std::int64_t>& off, auto count) {
+    off.assign(n + 1, 0);
+    for_each(HostExec{}, n, [&](std::int64_t j) { off[j + 1] = count(j); });
+    std::partial_sum(off.begin(), off.end(), off.begin());
+  };
+  auto lv = [&](std::int64_t gid) {  // local index; a missing vertex is recorded
+    const std::int32_t l = g2l[gid];
+    if (l < 0) missing.store(gid, std::memory_order_relaxed);
+    return l;
+  };
+  c.tri_v.resize(ntl);
+  c.tri_body.resize(ntl);
+  offsets(ntl, c.own_v_off,
+          [&](std::int64_t j) { return gc.own_v_off[tris[j] + 1] - gc.own_v_off[tris[j]]; });
+  offsets(ntl, c.own_e_off,
+          [&](std::int64_t j) { return gc.own_e_off[tris[j] + 1] - gc.own_e_off[tris[j]]; });
+  c.own_v.resize(c.own_v_off[ntl]);
+  c.own_e.resize(c.own_e_off[ntl]);
+  for_each(HostExec{}, ntl, [&](std::int64_t j) {
+    const std::int64_t s = tris[j];
+    c.tri_v[j] = {lv(gc.tri_v[s][0]), lv(gc.tri_v[s][1]), lv(gc.tri_v[s][2])};
+    c.tri_body[j] = gc.tri_body[s];
+    std::int64_t o = c.own_v_off[j];
     for (std::int64_t q = gc.own_v_off[s]; q < gc.own_v_off[s + 1]; ++q)
-      c.own_v.push_back(local(gc.own_v[q]));
+      c.own_v[o++] = lv(gc.own_v[q]);
+    o = c.own_e_off[j];
     for (std::int64_t q = gc.own_e_off[s]; q < gc.own_e_off[s + 1]; ++q)
-      c.own_e.push_back(edge_l[gc.own_e[q]]);
-    c.own_v_off.push_back(static_cast<std::int64_t>(c.own_v.size()));
-    c.own_e_off.push_back(static_cast<std::int64_t>(c.own_e.size()));
-  }
-  for (std::int64_t e : edges) {
+      c.own_e[o++] = edge_l[gc.own_e[q]];
+  });
+  c.edges.resize(nel);
+  c.edge_tri.resize(nel);
+  for_each(HostExec{}, nel, [&](std::int64_t j) {
+    const std::int64_t e = edges[j];
     // Endpoints keep the global order (edge-edge geometry is evaluated a0 -> a1).
-    c.edges.push_back({local(gc.edges[e][0]), local(gc.edges[e][1])});
-    std::array<std::int32_t, 2> et{-1, -1};
+    c.edges[j] = {lv(gc.edges[e][0]), lv(gc.edges[e][1])};
     for (int k = 0; k < 2; ++k)
-      if (gc.edge_tri[e][k] >= 0) et[k] = tri_l[gc.edge_tri[e][k]];
-    c.edge_tri.push_back(et);
-  }
-  c.prim_tri_off.push_back(0);
-  for (std::int32_t p : prims) {
-    std::array<std::int32_t, 4> pv{-1, -1, -1, -1};
-    for (int k = 0; k < 4; ++k)
-      if (gc.prim_v[p][k] >= 0) pv[k] = local(gc.prim_v[p][k]);
-    c.prim_v.push_back(pv);
-    c.prim_body.push_back(gc.prim_body[p]);
+      c.edge_tri[j][k] = gc.edge_tri[e][k] >= 0 ? tri_l[gc.edge_tri[e][k]] : -1;
+  });
+  c.prim_v.resize(npl);
+  c.prim_body.resize(npl);
+  offsets(npl, c.prim_tri_off, [&](std::int64_t j) {
+    return gc.prim_tri_off[prims[j] + 1] - gc.prim_tri_off[prims[j]];
+  });
+  c.prim_tri.resize(c.prim_tri_off[npl]);
+  for_each(HostExec{}, npl, [&](std::int64_t j) {
+    const std::int64_t p = prims[j];
+    for (int k = 0; k < 4; ++k) c.prim_v[j][k] = gc.prim_v[p][k] >= 0 ? lv(gc.prim_v[p][k]) : -1;
+    c.prim_body[j] = gc.prim_body[p];
+    std::int64_t o = c.prim_tri_off[j];
     for (std::int64_t q = gc.prim_tri_off[p]; q < gc.prim_tri_off[p + 1]; ++q)
-      c.prim_tri.push_back(tri_l[gc.prim_tri[q]]);
-    c.prim_tri_off.push_back(static_cast<std::int64_t>(c.prim_tri.size()));
-    if (!gc.body_fixed[gc.prim_body[p]])
-      c.n_free_prims = static_cast<std::int64_t>(c.prim_v.size());
-  }
-  for (std::int64_t i = 0; i < L.n_owned; ++i)
-    if (ix.wall_vertex[L.vertices[i]]) c.wall_vertices.push_back(static_cast<std::int32_t>(i));
+      c.prim_tri[o++] = tri_l[gc.prim_tri[q]];
+  });
+  if (missing >= 0) local(missing);
+  // Free bodies' primitives come first: the count up to the last free one.
+  c.n_free_prims = npl;
+  while (c.n_free_prims > 0 && gc.body_fixed[c.prim_body[c.n_free_prims - 1]]) --c.n_free_prims;
+  const std::vector<std::int64_t> wall = select_indices(
+      HostExec{}, L.n_owned, [&](std::int64_t i) { return ix.wall_vertex[L.vertices[i]] != 0; });
+  c.wall_vertices.assign(wall.begin(), wall.end());
   out.ids.finish();
-  return out;
 }
 
 }  // namespace qdemsph

@@ -87,5 +87,10 @@ struct LocalModel {
 LocalModel build_local_model(const Model& global, const ModelIndex& index,
                              const LocalLayout& layout, const std::vector<Vec3>& x,
                              const std::vector<Vec3>& v, bool with_contact = true);
+// The same into `out`, whose arrays (an earlier part's) keep their storage: a rank rebuilding
+// its part every few hundred steps touches no fresh pages for the large ones.
+void build_local_model(const Model& global, const ModelIndex& index, const LocalLayout& layout,
+                       const std::vector<Vec3>& x, const std::vector<Vec3>& v, LocalModel& out,
+                       bool with_contact = true);
 
 }  // namespace qdemsph

@@ -8,8 +8,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <memory>
 #include <set>
+#include <type_traits>
 #include <vector>
 
 #include "contact/contact_record.hpp"
@@ -173,6 +175,59 @@ TEST(LocalModel, TwoPartsGiveTheWholeModelsForcesBitForBit) {
   EXPECT_NEAR(sum.kinetic, whole_e.kinetic, 1e-12 * std::abs(whole_e.kinetic));
   EXPECT_NEAR(sum.potential, whole_e.potential, 1e-12 * std::abs(whole_e.potential));
   EXPECT_NEAR(sum.dissipated, whole_e.dissipated, 1e-12 * std::abs(whole_e.dissipated));
+}
+
+// A rebuild into an earlier part's LocalModel (the distributed backend keeps one, so that its
+// arrays' storage is reused) gives the same model as a fresh build, here from a larger part into
+// a smaller one, and without contact after with.
+TEST(LocalModel, BuildIntoAnEarlierPartsStorageEqualsAFreshBuild) {
+  auto pb = make_problem(kScene);
+  const Model& g = pb.model;
+  const ModelIndex ix = index_model(g);
+  auto values = [&](const LocalLayout& L, const std::vector<Vec3>& from) {
+    std::vector<Vec3> out;
+    for (auto gv : L.vertices) out.push_back(from[gv]);
+    return out;
+  };
+  auto same = [](const auto& a, const auto& b) {
+    using T = typename std::decay_t<decltype(a)>::value_type;
+    return a.size() == b.size() &&
+           (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+  };
+  const LocalLayout big = layout_of(g, ix, 0, 0.45), small = layout_of(g, ix, 1, 0.45);
+  ASSERT_GT(big.tets.size(), small.tets.size());
+  LocalModel reused;
+  build_local_model(g, ix, big, values(big, g.x), values(big, g.v), reused);
+  for (bool contact : {true, false}) {
+    build_local_model(g, ix, small, values(small, g.x), values(small, g.v), reused, contact);
+    const LocalModel fresh =
+        build_local_model(g, ix, small, values(small, g.x), values(small, g.v), contact);
+    const Model &a = reused.model, &b = fresh.model;
+    EXPECT_TRUE(same(a.X, b.X) && same(a.x, b.x) && same(a.v, b.v) && same(a.fext, b.fext) &&
+                same(a.fpre, b.fpre) && same(a.mass, b.mass) && same(a.inv_mass, b.inv_mass) &&
+                same(a.relax_inv_mass, b.relax_inv_mass) && same(a.flags, b.flags) &&
+                same(a.gid, b.gid) && same(a.body, b.body));
+    EXPECT_TRUE(same(a.tets, b.tets) && same(a.dX_inv, b.dX_inv) && same(a.vol0, b.vol0) &&
+                same(a.tet_material, b.tet_material) && same(a.tet_gid, b.tet_gid));
+    EXPECT_EQ(a.n_free_vertices, b.n_free_vertices);
+    EXPECT_EQ(a.n_free_tets, b.n_free_tets);
+    EXPECT_EQ(a.n_counted_tets, b.n_counted_tets);
+    const ContactModel &ca = a.contact, &cb = b.contact;
+    EXPECT_EQ(ca.enabled, contact);
+    EXPECT_EQ(cb.enabled, contact);
+    EXPECT_TRUE(same(ca.tri_v, cb.tri_v) && same(ca.tri_body, cb.tri_body) &&
+                same(ca.edges, cb.edges) && same(ca.edge_tri, cb.edge_tri) &&
+                same(ca.own_v_off, cb.own_v_off) && same(ca.own_e_off, cb.own_e_off) &&
+                same(ca.own_v, cb.own_v) && same(ca.own_e, cb.own_e));
+    EXPECT_TRUE(same(ca.prim_v, cb.prim_v) && same(ca.prim_body, cb.prim_body) &&
+                same(ca.prim_tri_off, cb.prim_tri_off) && same(ca.prim_tri, cb.prim_tri) &&
+                same(ca.wall_vertices, cb.wall_vertices) && same(ca.body_h, cb.body_h));
+    EXPECT_EQ(ca.n_free_prims, cb.n_free_prims);
+    EXPECT_TRUE(same(reused.ids.vertex, fresh.ids.vertex) &&
+                same(reused.ids.triangle, fresh.ids.triangle) &&
+                same(reused.ids.edge, fresh.ids.edge));
+    if (contact) EXPECT_GT(cb.prim_v.size(), 0u);
+  }
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
-// Indexed copies within a memory space (core/memory.hpp): known answers on the host, the same
-// on a device (skipped without a GPU); staging bytes; the GPU of each rank.
+// Buffers keep their allocation within its capacity; indexed copies within a memory space
+// (core/memory.hpp): known answers on the host, the same on a device (skipped without a GPU);
+// staging bytes; the GPU of each rank.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -11,6 +12,46 @@
 
 namespace qdemsph {
 namespace {
+
+// A buffer's allocation grows only: sizes within the capacity keep the storage (resize still
+// zero-fills, assign copies), a size beyond it reallocates with 1/8 headroom, and moving a buffer
+// moves its storage. On a device the same (skipped without a GPU).
+void check_capacity(Space s) {
+  Buffer<double> b(s);
+  b.assign({1, 2, 3, 4, 5, 6, 7, 8});
+  const double* p = b.cview().p;
+  EXPECT_EQ(b.capacity(), 8);  // a first allocation is exact
+  b.resize(5);
+  EXPECT_EQ(b.cview().p, p);
+  EXPECT_EQ(b.size(), 5);
+  EXPECT_EQ(b.to_host(), std::vector<double>(5, 0.0));
+  b.assign({9, 8, 7});
+  EXPECT_EQ(b.cview().p, p);
+  EXPECT_EQ(b.to_host(), (std::vector<double>{9, 8, 7}));
+  EXPECT_EQ(b.bytes(), 8 * sizeof(double));  // the allocation's, not the size's
+  b.resize_for_overwrite(8);
+  EXPECT_EQ(b.cview().p, p);
+  EXPECT_EQ(b.size(), 8);
+  b.resize(16);  // beyond the capacity: a new allocation, zero-filled, with room to grow
+  EXPECT_EQ(b.capacity(), 18);
+  EXPECT_EQ(b.to_host(), std::vector<double>(16, 0.0));
+  const double* q = b.cview().p;
+  Buffer<double> c(std::move(b));
+  EXPECT_EQ(c.cview().p, q);
+  EXPECT_EQ(c.capacity(), 18);
+  EXPECT_EQ(b.capacity(), 0);
+  b = Buffer<double>(s, 2);
+  c = std::move(b);  // c takes the small one, b the large one (freed with b)
+  EXPECT_EQ(c.capacity(), 2);
+  EXPECT_EQ(b.cview().p, q);
+}
+
+TEST(Memory, BuffersKeepTheirAllocationWithinTheCapacity) { check_capacity(Space::Host); }
+
+TEST(Memory, DeviceBuffersKeepTheirAllocationWithinTheCapacity) {
+  if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
+  check_capacity(Space::Cuda);
+}
 
 // gather then scatter of doubles and bytes through buffers of space s; returns the results.
 struct Copied {

@@ -1,0 +1,75 @@
+// Host orchestration primitives of a distributed rank's layout rebuild: stream compaction and
+// bucketing by key (core/select_host.hpp) and the sorting permutation (core/parallel_sort.hpp)
+// give the serial answers, the same for any number of threads.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <numeric>
+#include <vector>
+
+#include "core/parallel_sort.hpp"
+#include "core/select_host.hpp"
+
+namespace qdemsph {
+namespace {
+
+// Runs f with `threads` OpenMP threads, then restores the setting.
+template <class F>
+auto with_threads(int threads, F f) {
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(threads);
+  auto r = f();
+  omp_set_num_threads(before);
+  return r;
+}
+
+TEST(HostSelect, IndicesInOrderForAnyThreadCount) {
+  const std::int64_t n = 5 * kMinParallel + 17;  // long enough to run in parallel
+  auto keep = [](std::int64_t i) { return (i * 7919) % 13 < 4; };
+  std::vector<std::int64_t> serial;
+  for (std::int64_t i = 0; i < n; ++i)
+    if (keep(i)) serial.push_back(i);
+  for (int t : {1, 2, 3, 8})
+    EXPECT_EQ(with_threads(t, [&] { return select_indices(HostExec{}, n, keep); }), serial)
+        << t << " threads";
+  EXPECT_TRUE(select_indices(HostExec{}, 0, keep).empty());
+  EXPECT_EQ(select_indices(HostExec{}, 5, [](std::int64_t i) { return i != 2; }),
+            (std::vector<std::int64_t>{0, 1, 3, 4}));
+}
+
+TEST(HostSelect, BucketsByKeyInOrderForAnyThreadCount) {
+  const std::int64_t n = 4 * kMinParallel + 5;
+  auto key = [](std::int64_t i) { return static_cast<int>((i * 31) % 7) - 1; };  // -1..5
+  Buckets serial;
+  serial.start.push_back(0);
+  for (int k = 0; k < 4; ++k) {  // keys 0..3 kept, -1, 4 and 5 dropped
+    for (std::int64_t i = 0; i < n; ++i)
+      if (key(i) == k) serial.index.push_back(i);
+    serial.start.push_back(static_cast<std::int64_t>(serial.index.size()));
+  }
+  for (int t : {1, 2, 3, 8}) {
+    const Buckets b = with_threads(t, [&] { return bucket_indices(HostExec{}, n, 4, key); });
+    EXPECT_EQ(b.index, serial.index) << t << " threads";
+    EXPECT_EQ(b.start, serial.start) << t << " threads";
+  }
+}
+
+TEST(HostSelect, SortedOrderOfUniqueKeysForAnyThreadCount) {
+  const std::int64_t n = 3 * kMinParallel;
+  std::vector<std::uint64_t> keys(n);
+  for (std::int64_t i = 0; i < n; ++i)
+    keys[i] = (static_cast<std::uint64_t>(i) * 2654435761u) % 1000003;
+  std::vector<std::int64_t> serial(n);
+  std::iota(serial.begin(), serial.end(), std::int64_t{0});
+  std::sort(serial.begin(), serial.end(), [&](auto a, auto b) { return keys[a] < keys[b]; });
+  for (int t : {1, 2, 3, 8})
+    EXPECT_EQ(with_threads(t, [&] { return sorted_order(keys); }), serial) << t << " threads";
+  const std::vector<std::int64_t> g = gathered<std::int64_t>(keys, serial);
+  EXPECT_TRUE(std::is_sorted(g.begin(), g.end()));
+  EXPECT_EQ(g.front(), static_cast<std::int64_t>(keys[serial.front()]));
+}
+
+}  // namespace
+}  // namespace qdemsph
