@@ -231,6 +231,7 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   c.kn_factor = gc.kn_factor;
   c.kt_ratio = gc.kt_ratio;
   c.skin = gc.skin;
+  c.max_penetration = gc.max_penetration;
   c.walls = gc.walls;
   c.body_h = gc.body_h;
   c.body_fixed = gc.body_fixed;

@@ -29,7 +29,7 @@ run: {mode: dynamic, end_time: 1.0}
 gravity: [0, 0, -9.81]
 damping: {mass: 0.3}
 materials: {m: {law: svk, E: 1.0e6, nu: 0.3, density: 1000, viscosity: 20}}
-contact: {d_dem: 0.01}
+contact: {d_dem: 0.01, max_penetration: 0.05}
 walls: [{point: [0, 0, -0.5], normal: [0, 0, 1]}]
 bodies:
   - {name: a, material: m, mesh: {type: box, size: [0.6, 0.2, 0.2], cells: [6, 2, 2]},
@@ -111,6 +111,7 @@ TEST(LocalModel, TwoPartsGiveTheWholeModelsForcesBitForBit) {
     const LocalModel& lm = parts.emplace_back(build_local_model(g, ix, L, x, v));
     EXPECT_EQ(lm.model.n_free_vertices, L.n_owned);
     EXPECT_EQ(lm.model.n_counted_tets, L.n_home);
+    EXPECT_EQ(lm.model.contact.max_penetration, 0.05);  // the scene's contact settings carry over
     auto& be = backends.emplace_back(make_host_backend());
     be->upload(lm.model);
     be->element_forces(0, lm.model.n_free_tets, 1e-4);
