@@ -57,17 +57,25 @@ class MpiFluidExchange final : public FluidExchange {
     const double t0 = MPI_Wtime();
     ++rebuilds_;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
-    std::vector<double> cost = p.cost;
-    if (cost.size() != p.size()) {
-      cost.resize(n);
-      for (std::int64_t i = 0; i < n; ++i) cost[i] = p.type[i] == kSphFluid ? 1.0 : kFluidWallCost;
+    // Each particle's curve key on the decomposition's grid (a new cut computes them anyway).
+    if (dec_.splitters.empty() || rebalance_) {
+      std::span<const double> cost = p.cost;
+      if (p.cost.size() != p.size()) {  // not measured yet
+        cost_.resize(n);
+        for_each(HostExec{}, n,
+                 [&](std::int64_t i) { cost_[i] = p.type[i] == kSphFluid ? 1.0 : kFluidWallCost; });
+        cost = cost_;
+      }
+      dec_ = balance(comm_, p.x, cost, curve_, max_cell_, &curve_key_);
+    } else {
+      grid_keys(dec_.grid, p.x, curve_key_);
     }
-    if (dec_.splitters.empty() || rebalance_) dec_ = balance(comm_, p.x, cost, curve_, max_cell_);
     rebalance_ = false;
 
     // Owned particles to the owners of their positions, into o_ (its storage reused).
     dest_.resize(n);
-    for_each(HostExec{}, n, [&](std::int64_t i) { dest_[i] = dec_.owner(p.x[i]); });
+    for_each(HostExec{}, n,
+             [&](std::int64_t i) { dest_[i] = owner_of_key(dec_.splitters, curve_key_[i]); });
     MigratePlan mp(comm_, dest_, p.gid);
     resize(o_, mp.n_new());
     mp.begin(fields_of(p));
@@ -350,8 +358,10 @@ class MpiFluidExchange final : public FluidExchange {
     std::vector<std::int64_t> cell_off, off;  // per cell / per particle: a range of ranks
     std::vector<int> cell_ranks, ranks;
   };
-  std::vector<int> dest_;  // per particle: its new owner
-  FluidParticles o_;       // the new layout being built (between calls: the last input)
+  std::vector<double> cost_;              // per particle: its cost before any is measured
+  std::vector<std::uint64_t> curve_key_;  // per particle: its key on dec_.grid
+  std::vector<int> dest_;                 // per particle: its new owner
+  FluidParticles o_;  // the new layout being built (between calls: the last input)
   GhostScratch g_;
 };
 
