@@ -6,6 +6,9 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+
+#include "core/exec_host.hpp"
 
 namespace qdemsph {
 
@@ -21,6 +24,26 @@ void check_fields(std::span<const CommField> f, std::int64_t min_items, const ch
                                   " items, needs " + std::to_string(min_items));
 }
 
+// dst(k) <- src(k), elements of `elem` bytes, for k < n, on the host's threads: the items'
+// copies into and out of the message buffers are independent. The common sizes (a byte, a
+// double or id, a Vec3) are copies of a constant size, not a call to memcpy per element.
+template <class D, class S>
+void copy_each(std::int64_t n, std::size_t elem, D dst, S src) {
+  auto copy = [&](auto bytes) {
+    for_each(HostExec{}, n, [&](std::int64_t k) { std::memcpy(dst(k), src(k), bytes); });
+  };
+  switch (elem) {
+    case 1:
+      return copy(std::integral_constant<std::size_t, 1>{});
+    case 8:
+      return copy(std::integral_constant<std::size_t, 8>{});
+    case 24:
+      return copy(std::integral_constant<std::size_t, 24>{});
+    default:
+      return copy(elem);
+  }
+}
+
 int as_count(std::int64_t bytes) {
   if (bytes > INT_MAX)
     throw std::runtime_error("comm plan: message of " + std::to_string(bytes) +
@@ -31,11 +54,18 @@ int as_count(std::int64_t bytes) {
 }  // namespace
 
 CommEngine::CommEngine(MPI_Comm comm, std::span<const std::int64_t> dest_offsets,
-                       std::span<const int> dest_ranks, std::int64_t recv_base)
-    : recv_base_(recv_base) {
+                       std::span<const int> dest_ranks, std::int64_t recv_base) {
   MPI_Comm_dup(comm, &comm_);
   MPI_Comm_rank(comm_, &rank_);
   MPI_Comm_size(comm_, &size_);
+  replan(dest_offsets, dest_ranks, recv_base);
+}
+
+void CommEngine::replan(std::span<const std::int64_t> dest_offsets, std::span<const int> dest_ranks,
+                        std::int64_t recv_base) {
+  if (in_flight_ || device_)
+    throw std::logic_error("comm plan: replan() in flight or on device buffers");
+  recv_base_ = recv_base;
   n_items_ = static_cast<std::int64_t>(dest_offsets.size()) - 1;
   const std::int64_t n_items = n_items_;
   // Count sends per rank, then fill send slots by a counting sort (stable: item order).
@@ -59,6 +89,7 @@ CommEngine::CommEngine(MPI_Comm comm, std::span<const std::int64_t> dest_offsets
   MPI_Alltoall(count.data(), 1, MPI_INT64_T, rcount.data(), 1, MPI_INT64_T, comm_);
   recv_off_.assign(size_ + 1, 0);
   for (int r = 0; r < size_; ++r) recv_off_[r + 1] = recv_off_[r] + rcount[r];
+  nbrs_.clear();
   for (int r = 0; r < size_; ++r)
     if (r != rank_ && (count[r] > 0 || rcount[r] > 0)) nbrs_.push_back(r);
 }
@@ -211,10 +242,9 @@ void CommEngine::begin(std::span<const CommField> src, Dir dir) {
   const std::int64_t ns = so[size_];
   std::size_t off = 0;
   for (const CommField& f : src) {
-    for (std::int64_t k = 0; k < ns; ++k) {
-      const std::int64_t item = fwd ? send_index_[k] : recv_base_ + k;
-      std::memcpy(&sendbuf_[k * stride_ + off], f.data + item * f.elem, f.elem);
-    }
+    copy_each(
+        ns, f.elem, [&](std::int64_t k) { return &sendbuf_[k * stride_ + off]; },
+        [&](std::int64_t k) { return f.data + (fwd ? send_index_[k] : recv_base_ + k) * f.elem; });
     off += f.elem;
   }
   seconds_.pack += MPI_Wtime() - t0;
@@ -306,8 +336,9 @@ void CommEngine::finish(std::span<const CommField> dst, Dir dir) {
   if (fwd) {
     const std::int64_t nr = n_recv();
     for (const CommField& f : dst) {
-      for (std::int64_t k = 0; k < nr; ++k)
-        std::memcpy(f.data + (recv_base_ + k) * f.elem, &recvbuf_[k * stride_ + off], f.elem);
+      copy_each(
+          nr, f.elem, [&](std::int64_t k) { return f.data + (recv_base_ + k) * f.elem; },
+          [&](std::int64_t k) { return &recvbuf_[k * stride_ + off]; });
       off += f.elem;
     }
   } else {
@@ -379,19 +410,32 @@ std::vector<std::byte> CommEngine::exchange(std::span<const std::byte> send,
 }
 
 MigratePlan::MigratePlan(MPI_Comm comm, std::span<const int> dest,
-                         std::span<const std::uint64_t> gid)
-    : n_old_(static_cast<std::int64_t>(dest.size())) {
+                         std::span<const std::uint64_t> gid) {
   if (gid.size() != dest.size())
     throw std::invalid_argument("MigratePlan: " + std::to_string(dest.size()) +
                                 " destinations but " + std::to_string(gid.size()) + " ids");
-  std::vector<std::int64_t> offsets(dest.size() + 1);
-  for (std::size_t i = 0; i <= dest.size(); ++i) offsets[i] = static_cast<std::int64_t>(i);
-  engine_ = std::make_unique<CommEngine>(comm, offsets, dest, 0);
+  engine_ = std::make_unique<CommEngine>(comm, offsets_for(dest), dest, 0);
   new_gids_.resize(engine_->n_recv());
   const CommField s = comm_field(const_cast<std::uint64_t*>(gid.data()), n_old_);
   const CommField d = comm_field(new_gids_);
   begin({&s, 1});
   finish({&d, 1});
+}
+
+MigratePlan::MigratePlan(MPI_Comm comm, std::span<const int> dest)
+    : engine_(std::make_unique<CommEngine>(comm, offsets_for(dest), dest, 0)) {}
+
+void MigratePlan::replan(std::span<const int> dest) {
+  engine_->replan(offsets_for(dest), dest, 0);
+  new_gids_.clear();
+}
+
+std::span<const std::int64_t> MigratePlan::offsets_for(std::span<const int> dest) {
+  n_old_ = static_cast<std::int64_t>(dest.size());
+  const std::int64_t had = static_cast<std::int64_t>(offsets_.size());
+  offsets_.resize(n_old_ + 1);
+  for (std::int64_t i = had; i <= n_old_; ++i) offsets_[i] = i;
+  return offsets_;
 }
 
 HaloPlan::HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> offsets,

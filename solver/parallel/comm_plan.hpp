@@ -94,6 +94,11 @@ class CommEngine {
   // dest_ranks[dest_offsets[i] .. dest_offsets[i + 1]). Collective over comm.
   CommEngine(MPI_Comm comm, std::span<const std::int64_t> dest_offsets,
              std::span<const int> dest_ranks, std::int64_t recv_base);
+  // New lists, as a new engine would have them, keeping the duplicated communicator and the
+  // host message buffers (a caller that plans again allocates them once). Collective; none in
+  // flight, no device buffers (use_device).
+  void replan(std::span<const std::int64_t> dest_offsets, std::span<const int> dest_ranks,
+              std::int64_t recv_base);
   ~CommEngine();
   CommEngine(const CommEngine&) = delete;
   CommEngine& operator=(const CommEngine&) = delete;
@@ -182,7 +187,13 @@ class CommEngine {
 // arrays hold n_new() items: those received, by source rank, then sender order.
 class MigratePlan {
  public:
+  // gid: the items' ids, sent along so that new_gids() names the received items.
   MigratePlan(MPI_Comm comm, std::span<const int> dest, std::span<const std::uint64_t> gid);
+  // Without ids (a caller that migrates them as one of its fields): new_gids() empty.
+  MigratePlan(MPI_Comm comm, std::span<const int> dest);
+  // A plan for new destinations (without ids) on the same engine: a caller that migrates
+  // repeatedly (a layout rebuild) keeps its communicator and message buffers. Collective.
+  void replan(std::span<const int> dest);
   std::int64_t n_old() const { return n_old_; }
   std::int64_t n_new() const { return engine_->n_recv(); }
   const std::vector<std::uint64_t>& new_gids() const { return new_gids_; }
@@ -202,7 +213,10 @@ class MigratePlan {
   const CommEngine& engine() const { return *engine_; }
 
  private:
+  // The engine's lists for dest: one destination per item (offsets 0, 1, ..., n_old_, kept).
+  std::span<const std::int64_t> offsets_for(std::span<const int> dest);
   std::int64_t n_old_ = 0;
+  std::vector<std::int64_t> offsets_;
   std::unique_ptr<CommEngine> engine_;
   std::vector<std::uint64_t> new_gids_;
 };

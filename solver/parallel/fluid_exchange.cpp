@@ -42,6 +42,7 @@ class MpiFluidExchange final : public FluidExchange {
     MPI_Comm_dup(comm, &comm_);
     MPI_Comm_rank(comm_, &me_);
     MPI_Comm_size(comm_, &np_);
+    migrate_ = std::make_unique<MigratePlan>(comm_, std::span<const int>{});
   }
   ~MpiFluidExchange() override {
     halo_.reset();
@@ -76,12 +77,12 @@ class MpiFluidExchange final : public FluidExchange {
     dest_.resize(n);
     for_each(HostExec{}, n,
              [&](std::int64_t i) { dest_[i] = owner_of_key(dec_.splitters, curve_key_[i]); });
-    MigratePlan mp(comm_, dest_, p.gid);
-    resize(o_, mp.n_new());
-    mp.begin(fields_of(p));
-    mp.finish(fields_of(o_));
-    migrated_bytes_ += mp.engine().last_bytes();
-    const std::int64_t nown = mp.n_new();
+    migrate_->replan(dest_);
+    resize(o_, migrate_->n_new());
+    migrate_->begin(fields_of(p));
+    migrate_->finish(fields_of(o_));
+    migrated_bytes_ += migrate_->engine().last_bytes();
+    const std::int64_t nown = migrate_->n_new();
 
     find_ghost_ranks(nown);
     halo_.reset();
@@ -343,6 +344,7 @@ class MpiFluidExchange final : public FluidExchange {
   std::int64_t evaluations_ = 0, rebuilds_ = 0;
   std::int64_t halo_bytes_ = 0, migrated_bytes_ = 0, band_bytes_ = 0;
   Decomposition dec_;
+  std::unique_ptr<MigratePlan> migrate_;  // re-planned at each distribute(): buffers kept
   std::unique_ptr<HaloPlan> halo_;
   // distribute()'s work arrays, kept so that a rebuild reuses their storage.
   struct GhostScratch {
