@@ -167,12 +167,19 @@ class MpiFluidExchange final : public FluidExchange {
   // and looked up.
   void find_ghost_ranks(std::int64_t nown) {
     GhostScratch& g = g_;
-    // The distinct band cells (in the order of their first particle) and each particle's.
+    // Each particle's band cell (on all threads), then the distinct cells in the order of their
+    // first particle: one lookup for a run of particles in the same cell.
+    g.key_of.resize(nown);
+    for_each(HostExec{}, nown, [&](std::int64_t i) { g.key_of[i] = cell_key(o_.x[i]); });
     g.cells.clear();
     g.cell_key.clear();
     g.cell_of.resize(nown);
     for (std::int64_t i = 0; i < nown; ++i) {
-      const std::uint64_t k = cell_key(o_.x[i]);
+      const std::uint64_t k = g.key_of[i];
+      if (i > 0 && k == g.key_of[i - 1]) {
+        g.cell_of[i] = g.cell_of[i - 1];
+        continue;
+      }
       g.cell_of[i] = g.cells.insert(k);
       if (g.cell_of[i] == static_cast<std::int64_t>(g.cell_key.size())) g.cell_key.push_back(k);
     }
@@ -255,8 +262,13 @@ class MpiFluidExchange final : public FluidExchange {
         if (hi[a] / s - lo[a] / s > 1) return false;
       return true;
     };
-    for (int l = g.order; l > 0 && !fits(); --l)
+    // Levels whose cells are at most half as wide as the box cannot fit (hi / s - lo / s >=
+    // (hi - lo) / s >= 2): skipped without the divisions of fits().
+    const std::uint32_t wide = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+    int l = g.order;
+    for (; l > 0 && 2 * std::uint64_t{s} <= wide; --l)
       s *= base, span *= std::uint64_t(base) * base * base;
+    for (; l > 0 && !fits(); --l) s *= base, span *= std::uint64_t(base) * base * base;
     if (!fits()) return false;
     for (std::uint32_t x = lo[0] / s; x <= hi[0] / s; ++x)
       for (std::uint32_t y = lo[1] / s; y <= hi[1] / s; ++y)
@@ -350,6 +362,7 @@ class MpiFluidExchange final : public FluidExchange {
   struct GhostScratch {
     KeyIndex cells;                       // the distinct band cells of the owned particles
     std::vector<std::uint64_t> cell_key;  // per cell
+    std::vector<std::uint64_t> key_of;    // per particle: its cell's key
     std::vector<std::int64_t> cell_of;    // per particle: its cell
     std::vector<std::uint8_t> border;     // per cell: not interior
     KeyIndex in_piece;                    // interior(): tree cells tested, and the answers
