@@ -5,6 +5,8 @@
 #include <new>
 #include <stdexcept>
 
+#include "core/exec_host.hpp"
+
 namespace qdemsph {
 
 #ifndef QDEMSPH_HAVE_CUDA
@@ -114,19 +116,21 @@ void space_zero(Space s, void* p, std::size_t bytes) {
 }
 
 void Vec3Buffer::assign(const std::vector<Vec3>& h) {
+  const std::int64_t n = static_cast<std::int64_t>(h.size());
   std::vector<double> c(h.size());
-  for (std::size_t i = 0; i < h.size(); ++i) c[i] = h[i].x;
-  x_.assign(c);
-  for (std::size_t i = 0; i < h.size(); ++i) c[i] = h[i].y;
-  y_.assign(c);
-  for (std::size_t i = 0; i < h.size(); ++i) c[i] = h[i].z;
-  z_.assign(c);
+  Buffer<double>* to[3] = {&x_, &y_, &z_};
+  for (int a = 0; a < 3; ++a) {
+    for_each(HostExec{}, n, [&](std::int64_t i) { c[i] = h[i][a]; });
+    to[a]->assign(c);
+  }
 }
 
 std::vector<Vec3> Vec3Buffer::to_host() const {
   auto x = x_.to_host(), y = y_.to_host(), z = z_.to_host();
   std::vector<Vec3> h(x.size());
-  for (std::size_t i = 0; i < h.size(); ++i) h[i] = {x[i], y[i], z[i]};
+  for_each(HostExec{}, static_cast<std::int64_t>(h.size()), [&](std::int64_t i) {
+    h[i] = {x[i], y[i], z[i]};
+  });
   return h;
 }
 

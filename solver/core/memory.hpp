@@ -81,16 +81,11 @@ class Buffer {
   }
   // Discards the contents; the new array is zero-filled.
   void resize(std::int64_t n) {
-    space_free(space_, p_);
-    p_ = nullptr;
-    n_ = n;
-    if (n > 0) {
-      p_ = static_cast<T*>(space_alloc(space_, sizeof(T) * n));
-      space_zero(space_, p_, sizeof(T) * n);
-    }
+    reallocate(n);
+    if (n > 0) space_zero(space_, p_, sizeof(T) * n);
   }
   void assign(const std::vector<T>& host) {
-    if (static_cast<std::int64_t>(host.size()) != n_) resize(host.size());
+    if (static_cast<std::int64_t>(host.size()) != n_) reallocate(host.size());
     if (n_ > 0) space_copy(p_, space_, host.data(), Space::Host, sizeof(T) * n_);
   }
   std::vector<T> to_host() const {
@@ -109,6 +104,13 @@ class Buffer {
   std::size_t bytes() const { return sizeof(T) * n_; }
 
  private:
+  void reallocate(std::int64_t n) {  // contents undefined
+    space_free(space_, p_);
+    p_ = nullptr;
+    n_ = n;
+    if (n > 0) p_ = static_cast<T*>(space_alloc(space_, sizeof(T) * n));
+  }
+
   Space space_ = Space::Host;
   T* p_ = nullptr;
   std::int64_t n_ = 0;
