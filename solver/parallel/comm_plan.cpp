@@ -24,13 +24,16 @@ void check_fields(std::span<const CommField> f, std::int64_t min_items, const ch
                                   " items, needs " + std::to_string(min_items));
 }
 
-// dst(k) <- src(k), elements of `elem` bytes, for k < n, on the host's threads: the items'
-// copies into and out of the message buffers are independent. The common sizes (a byte, a
-// double or id, a Vec3) are copies of a constant size, not a call to memcpy per element.
+// dst(k) <- src(k), elements of `elem` bytes, for k in [first, last), on the host's threads:
+// the items' copies into and out of the message buffers are independent. The common sizes (a
+// byte, a double or id, a Vec3) are copies of a constant size, not a call to memcpy each.
 template <class D, class S>
-void copy_each(std::int64_t n, std::size_t elem, D dst, S src) {
+void copy_each(std::int64_t first, std::int64_t last, std::size_t elem, D dst, S src) {
   auto copy = [&](auto bytes) {
-    for_each(HostExec{}, n, [&](std::int64_t k) { std::memcpy(dst(k), src(k), bytes); });
+    for_each(HostExec{}, last - first, [&](std::int64_t i) {
+      const std::int64_t k = first + i;
+      std::memcpy(dst(k), src(k), bytes);
+    });
   };
   switch (elem) {
     case 1:
@@ -42,6 +45,15 @@ void copy_each(std::int64_t n, std::size_t elem, D dst, S src) {
     default:
       return copy(elem);
   }
+}
+
+// f(first, last) over the slots [0, n) of a message buffer, less this rank's own [b, e) unless
+// `self`.
+template <class F>
+void for_slots(std::int64_t n, std::int64_t b, std::int64_t e, bool self, F f) {
+  if (self) return f(std::int64_t{0}, n);
+  f(std::int64_t{0}, b);
+  f(e, n);
 }
 
 int as_count(std::int64_t bytes) {
@@ -229,6 +241,32 @@ std::span<const std::byte> CommEngine::finish_device() {
 }
 
 void CommEngine::begin(std::span<const CommField> src, Dir dir) {
+  pack(src, dir, true);
+  post(dir, true);
+}
+
+void CommEngine::finish(std::span<const CommField> dst, Dir dir) { unpack(dst, dir, true); }
+
+void CommEngine::forward(std::span<const CommField> src, std::span<const CommField> dst) {
+  bool same = src.size() == dst.size();
+  for (std::size_t j = 0; same && j < src.size(); ++j) same = src[j].elem == dst[j].elem;
+  if (!same) throw std::invalid_argument("comm plan: forward() fields differ");
+  check_fields(dst, recv_base_ + n_recv(), "destination");
+  pack(src, Dir::Forward, false);
+  post(Dir::Forward, false);
+  // This rank's own items, while the others are in flight.
+  const double t0 = MPI_Wtime();
+  const std::int64_t from = send_off_[rank_], to = recv_base_ + recv_off_[rank_];
+  for (std::size_t j = 0; j < src.size(); ++j)
+    copy_each(
+        0, send_off_[rank_ + 1] - from, src[j].elem,
+        [&](std::int64_t k) { return dst[j].data + (to + k) * dst[j].elem; },
+        [&](std::int64_t k) { return src[j].data + send_index_[from + k] * src[j].elem; });
+  seconds_.unpack += MPI_Wtime() - t0;
+  unpack(dst, Dir::Forward, false);
+}
+
+void CommEngine::pack(std::span<const CommField> src, Dir dir, bool self) {
   if (in_flight_) throw std::logic_error("comm plan: begin() while an exchange is in flight");
   const double t0 = MPI_Wtime();
   stride_ = 0;
@@ -239,25 +277,27 @@ void CommEngine::begin(std::span<const CommField> src, Dir dir) {
   check_fields(src, fwd ? n_items_ : recv_base_ + n_recv(), "source");
   sendbuf_.resize(stride_ * so[size_]);
   // Pack, item-major. Bytes: stride per slot each way.
-  const std::int64_t ns = so[size_];
   std::size_t off = 0;
   for (const CommField& f : src) {
-    copy_each(
-        ns, f.elem, [&](std::int64_t k) { return &sendbuf_[k * stride_ + off]; },
-        [&](std::int64_t k) { return f.data + (fwd ? send_index_[k] : recv_base_ + k) * f.elem; });
+    for_slots(so[size_], so[rank_], so[rank_ + 1], self, [&](std::int64_t b, std::int64_t e) {
+      copy_each(
+          b, e, f.elem, [&](std::int64_t k) { return &sendbuf_[k * stride_ + off]; },
+          [&](std::int64_t k) {
+            return f.data + (fwd ? send_index_[k] : recv_base_ + k) * f.elem;
+          });
+    });
     off += f.elem;
   }
   seconds_.pack += MPI_Wtime() - t0;
-  post(dir);
 }
 
-void CommEngine::post(Dir dir) {
+void CommEngine::post(Dir dir, bool self) {
   const double t0 = MPI_Wtime();
   const bool fwd = dir == Dir::Forward;
   const std::vector<std::int64_t>& so = fwd ? send_off_ : recv_off_;
   const std::vector<std::int64_t>& ro = fwd ? recv_off_ : send_off_;
   recvbuf_.resize(stride_ * ro[size_]);
-  // Post receives first, then sends; the self part is a copy.
+  // Post receives first, then sends; the self part is a copy (unless forward() copies it).
   reqs_.clear();
   last_bytes_ = 0;
   for (int r : nbrs_) {
@@ -276,7 +316,7 @@ void CommEngine::post(Dir dir) {
     last_bytes_ += n * stride_;
   }
   const std::int64_t nself = so[rank_ + 1] - so[rank_];
-  if (nself > 0)
+  if (self && nself > 0)
     std::memcpy(recvbuf_.data() + ro[rank_] * stride_, sendbuf_.data() + so[rank_] * stride_,
                 nself * stride_);
   total_bytes_ += last_bytes_;
@@ -304,7 +344,7 @@ void CommEngine::begin_packed() {
   if (device_)
     post_device();
   else
-    post(Dir::Forward);
+    post(Dir::Forward, true);
 }
 
 std::span<const std::byte> CommEngine::finish_packed() {
@@ -318,7 +358,7 @@ std::span<const std::byte> CommEngine::finish_packed() {
   return {recvbuf_.data(), stride_ * static_cast<std::size_t>(n_recv())};
 }
 
-void CommEngine::finish(std::span<const CommField> dst, Dir dir) {
+void CommEngine::unpack(std::span<const CommField> dst, Dir dir, bool self) {
   if (!in_flight_) throw std::logic_error("comm plan: finish() without begin()");
   if (dir != dir_) throw std::logic_error("comm plan: finish() in another direction");
   std::size_t stride = 0;
@@ -334,11 +374,14 @@ void CommEngine::finish(std::span<const CommField> dst, Dir dir) {
   check_fields(dst, fwd ? recv_base_ + n_recv() : n_items_, "destination");
   std::size_t off = 0;
   if (fwd) {
-    const std::int64_t nr = n_recv();
     for (const CommField& f : dst) {
-      copy_each(
-          nr, f.elem, [&](std::int64_t k) { return f.data + (recv_base_ + k) * f.elem; },
-          [&](std::int64_t k) { return &recvbuf_[k * stride_ + off]; });
+      for_slots(n_recv(), recv_off_[rank_], recv_off_[rank_ + 1], self,
+                [&](std::int64_t b, std::int64_t e) {
+                  copy_each(
+                      b, e, f.elem,
+                      [&](std::int64_t k) { return f.data + (recv_base_ + k) * f.elem; },
+                      [&](std::int64_t k) { return &recvbuf_[k * stride_ + off]; });
+                });
       off += f.elem;
     }
   } else {

@@ -106,6 +106,10 @@ class CommEngine {
   enum class Dir { Forward, Reverse };
   void begin(std::span<const CommField> src, Dir dir);
   void finish(std::span<const CommField> dst, Dir dir);
+  // begin(src, Forward) and finish(dst, Forward) in one, the items this rank sends to itself
+  // copied from src to dst directly while the others are in flight, not through the message
+  // buffers (a migration keeps most items where they are).
+  void forward(std::span<const CommField> src, std::span<const CommField> dst);
   bool in_flight() const { return in_flight_; }
 
   // Packed forward exchange, for callers that pack their own records (a GPU backend packs
@@ -176,7 +180,11 @@ class CommEngine {
   void post_device();
   std::span<const std::byte> finish_device();
   std::size_t stride_ = 0;
-  void post(Dir dir);  // posts receives and sends of the packed sendbuf_ (begin's second half)
+  // begin() and finish() without this rank's own slots when not `self` (forward()): packs
+  // src, posts receives and sends of the packed sendbuf_, waits and unpacks into dst.
+  void pack(std::span<const CommField> src, Dir dir, bool self);
+  void post(Dir dir, bool self);
+  void unpack(std::span<const CommField> dst, Dir dir, bool self);
   bool in_flight_ = false;
   Dir dir_ = Dir::Forward;
   std::int64_t last_bytes_ = 0, total_bytes_ = 0;
@@ -201,13 +209,16 @@ class MigratePlan {
   // src fields have n_old() items, dst fields n_new(); they must be different arrays.
   void begin(std::span<const CommField> src) { engine_->begin(src, CommEngine::Dir::Forward); }
   void finish(std::span<const CommField> dst) { engine_->finish(dst, CommEngine::Dir::Forward); }
+  // Both in one; the items that stay are copied directly (CommEngine::forward).
+  void move(std::span<const CommField> src, std::span<const CommField> dst) {
+    engine_->forward(src, dst);
+  }
   // Blocking convenience: replaces v by its migrated contents.
   template <class T>
   void apply(std::vector<T>& v) {
     std::vector<T> out(static_cast<std::size_t>(n_new()));
     const CommField s = comm_field(v), d = comm_field(out);
-    begin({&s, 1});
-    finish({&d, 1});
+    move({&s, 1}, {&d, 1});
     v.swap(out);
   }
   const CommEngine& engine() const { return *engine_; }

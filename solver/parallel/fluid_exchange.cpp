@@ -79,8 +79,7 @@ class MpiFluidExchange final : public FluidExchange {
              [&](std::int64_t i) { dest_[i] = owner_of_key(dec_.splitters, curve_key_[i]); });
     migrate_->replan(dest_);
     resize(o_, migrate_->n_new());
-    migrate_->begin(fields_of(p));
-    migrate_->finish(fields_of(o_));
+    migrate_->move(fields_of(p), fields_of(o_));
     migrated_bytes_ += migrate_->engine().last_bytes();
     const std::int64_t nown = migrate_->n_new();
 

@@ -185,7 +185,7 @@ TEST(MigratePlan, EveryIdOnceWithItsPayload) {
 
 TEST(MigratePlan, ReplannedWithIdsAsAField) {
   // One plan without ids, planned again for each decomposition (and once with every item to
-  // the last rank): the ids travel as a field; each result is a new plan's.
+  // the last rank), moving with move(): the ids travel as a field; each result is a new plan's.
   Items it = initial_items();
   MigratePlan plan(MPI_COMM_WORLD, std::span<const int>{});
   const int p = size_of();
@@ -205,8 +205,7 @@ TEST(MigratePlan, ReplannedWithIdsAsAField) {
                             comm_field(it.pay), comm_field(it.gid)};
     const CommField t[5] = {comm_field(out.x), comm_field(out.y), comm_field(out.z),
                             comm_field(out.pay), comm_field(out.gid)};
-    plan.begin(s);
-    plan.finish(t);
+    plan.move(s, t);  // those that stay copied directly
     it = out;
     SCOPED_TRACE(order);
     if (order > 0) check_migrated(it, d);
