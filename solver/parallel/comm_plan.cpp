@@ -482,11 +482,10 @@ std::span<const std::int64_t> MigratePlan::offsets_for(std::span<const int> dest
 }
 
 HaloPlan::HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> offsets,
-                   std::span<const int> ranks, std::span<const std::uint64_t> gid)
+                   std::span<const int> ranks)
     : n_owned_(n_owned) {
-  if (static_cast<std::int64_t>(offsets.size()) != n_owned + 1 ||
-      static_cast<std::int64_t>(gid.size()) < n_owned)
-    throw std::invalid_argument("HaloPlan: offsets need n_owned + 1 entries and ids n_owned");
+  if (static_cast<std::int64_t>(offsets.size()) != n_owned + 1)
+    throw std::invalid_argument("HaloPlan: offsets need n_owned + 1 entries");
   int me = 0;
   MPI_Comm_rank(comm, &me);
   // Drop this rank and repeats from each item's list.
@@ -502,6 +501,13 @@ HaloPlan::HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int
     off[i + 1] = static_cast<std::int64_t>(dst.size());
   }
   engine_ = std::make_unique<CommEngine>(comm, off, dst, n_owned);
+}
+
+HaloPlan::HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> offsets,
+                   std::span<const int> ranks, std::span<const std::uint64_t> gid)
+    : HaloPlan(comm, n_owned, offsets, ranks) {
+  if (static_cast<std::int64_t>(gid.size()) < n_owned)
+    throw std::invalid_argument("HaloPlan: ids need n_owned entries");
   // Ghost ids: a gather of the id field into a scratch array of n_total items.
   std::vector<std::uint64_t> ids(n_total(), 0);
   std::copy(gid.begin(), gid.begin() + n_owned, ids.begin());

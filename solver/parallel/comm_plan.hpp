@@ -238,8 +238,12 @@ class MigratePlan {
 // repeats are ignored).
 class HaloPlan {
  public:
+  // gid: the owned items' ids, gathered so that ghost_gids() names the ghosts.
   HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> dest_offsets,
            std::span<const int> dest_ranks, std::span<const std::uint64_t> gid);
+  // Without ids (a caller that gathers them as one of its fields): ghost_gids() empty.
+  HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> dest_offsets,
+           std::span<const int> dest_ranks);
   std::int64_t n_owned() const { return n_owned_; }
   std::int64_t n_ghost() const { return engine_->n_recv(); }
   std::int64_t n_total() const { return n_owned_ + n_ghost(); }

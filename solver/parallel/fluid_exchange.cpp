@@ -85,7 +85,7 @@ class MpiFluidExchange final : public FluidExchange {
 
     find_ghost_ranks(nown);
     halo_.reset();
-    halo_ = std::make_unique<HaloPlan>(comm_, nown, g_.off, g_.ranks, o_.gid);
+    halo_ = std::make_unique<HaloPlan>(comm_, nown, g_.off, g_.ranks);  // ids go as a field
     halo_->engine().use_device(space_ == Space::Cuda, 6 * sizeof(double));
     resize(o_, halo_->n_total());
     const auto f = fields_of(o_);
