@@ -1,10 +1,12 @@
 #include "parallel/balance.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
-#include <numeric>
 #include <stdexcept>
 
+#include "core/exec_host.hpp"
+#include "core/radix_sort.hpp"
 #include "parallel/partition.hpp"
 
 namespace qdemsph {
@@ -29,8 +31,14 @@ void allreduce_sum_same(MPI_Comm comm, double* v, int n) {
   MPI_Bcast(v, n, MPI_DOUBLE, 0, comm);
 }
 
+void grid_keys(const SfcGrid& grid, std::span<const Vec3> pos, std::vector<std::uint64_t>& keys) {
+  keys.resize(pos.size());
+  for_each(HostExec{}, static_cast<std::int64_t>(pos.size()),
+           [&](std::int64_t i) { keys[i] = grid.key(pos[i]); });
+}
+
 Decomposition balance(MPI_Comm comm, std::span<const Vec3> pos, std::span<const double> cost,
-                      Curve curve, double max_cell_fraction) {
+                      Curve curve, double max_cell_fraction, std::vector<std::uint64_t>* keys_out) {
   if (pos.size() != cost.size())
     throw std::invalid_argument("balance: positions and costs differ in size");
   int nranks = 1;
@@ -53,18 +61,22 @@ Decomposition balance(MPI_Comm comm, std::span<const Vec3> pos, std::span<const 
   if (!(glo[0] <= ghi[0])) d.grid.lo = Vec3{0, 0, 0};  // no items anywhere
   d.grid.h = side / d.grid.side();
 
-  // Local items sorted by key with prefix sums: the cost of a key range is a difference.
-  std::vector<std::uint64_t> keys(pos.size());
-  for (std::size_t i = 0; i < pos.size(); ++i) keys[i] = d.grid.key(pos[i]);
-  std::vector<std::size_t> idx(pos.size());
-  std::iota(idx.begin(), idx.end(), std::size_t{0});
-  std::sort(idx.begin(), idx.end(),
-            [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
-  std::vector<std::uint64_t> sorted(idx.size());
-  std::vector<double> prefix(idx.size() + 1, 0.0);
-  for (std::size_t i = 0; i < idx.size(); ++i) {
-    sorted[i] = keys[idx[i]];
-    prefix[i + 1] = prefix[i] + cost[idx[i]];
+  // Local items sorted by key (stable: those of one finest cell in their input order) with
+  // prefix sums: the cost of a key range is a difference.
+  std::vector<std::uint64_t> own_keys;
+  std::vector<std::uint64_t>& keys = keys_out ? *keys_out : own_keys;
+  grid_keys(d.grid, pos, keys);
+  std::vector<std::pair<std::uint64_t, double>> items(pos.size()), scratch;
+  for_each(HostExec{}, static_cast<std::int64_t>(items.size()), [&](std::int64_t i) {
+    items[i] = {keys[i], cost[i]};
+  });
+  const std::uint64_t s = d.grid.side();
+  radix_sort(items, scratch, std::bit_width(s * s * s - 1));
+  std::vector<std::uint64_t> sorted(items.size());
+  std::vector<double> prefix(items.size() + 1, 0.0);
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    sorted[i] = items[i].first;
+    prefix[i + 1] = prefix[i] + items[i].second;
   }
   double total = prefix.back();
   allreduce_sum_same(comm, &total, 1);

@@ -37,9 +37,15 @@ Curve parse_curve(const std::string& name);  // hilbert | morton | peano
 const char* curve_name(Curve c);
 
 // pos/cost: this rank's items. max_cell_fraction: leaves are split while their cost exceeds
-// this fraction of the mean rank load (down to the finest grid level).
+// this fraction of the mean rank load (down to the finest grid level). keys (optional):
+// receives each item's key on the new grid, so that a caller who looks up the items' owners
+// (owner_of_key(d.splitters, keys[i]) == d.owner(pos[i])) need not compute them again.
 Decomposition balance(MPI_Comm comm, std::span<const Vec3> pos, std::span<const double> cost,
-                      Curve curve, double max_cell_fraction);
+                      Curve curve, double max_cell_fraction,
+                      std::vector<std::uint64_t>* keys = nullptr);
+
+// keys[i] = grid.key(pos[i]) (OpenMP threads).
+void grid_keys(const SfcGrid& grid, std::span<const Vec3> pos, std::vector<std::uint64_t>& keys);
 
 // Sum over ranks with the same result on every rank (reduce to rank 0, then broadcast), so
 // that decisions taken from it agree everywhere.

@@ -31,10 +31,8 @@ struct SfcGrid {
   Vec3 lo{0, 0, 0};
   double h = 1;  // finest cell size
 
-  QDEMSPH_HD std::uint32_t side() const {
-    std::uint32_t s = 1;
-    for (int i = 0; i < order; ++i) s *= curve_base(curve);
-    return s;
+  QDEMSPH_HD std::uint32_t side() const {  // a shift, not a loop, on the key's hot path
+    return curve == Curve::Peano ? sfc_pow3(order) : 1u << order;
   }
   QDEMSPH_HD std::uint32_t coord(double p, double p0) const {
     const double c = std::floor((p - p0) / h);

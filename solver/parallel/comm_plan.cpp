@@ -6,6 +6,7 @@
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "core/exec_host.hpp"
 
@@ -23,6 +24,38 @@ void check_fields(std::span<const CommField> f, std::int64_t min_items, const ch
                                   " items, needs " + std::to_string(min_items));
 }
 
+// dst(k) <- src(k), elements of `elem` bytes, for k in [first, last), on the host's threads:
+// the items' copies into and out of the message buffers are independent. The common sizes (a
+// byte, a double or id, a Vec3) are copies of a constant size, not a call to memcpy each.
+template <class D, class S>
+void copy_each(std::int64_t first, std::int64_t last, std::size_t elem, D dst, S src) {
+  auto copy = [&](auto bytes) {
+    for_each(HostExec{}, last - first, [&](std::int64_t i) {
+      const std::int64_t k = first + i;
+      std::memcpy(dst(k), src(k), bytes);
+    });
+  };
+  switch (elem) {
+    case 1:
+      return copy(std::integral_constant<std::size_t, 1>{});
+    case 8:
+      return copy(std::integral_constant<std::size_t, 8>{});
+    case 24:
+      return copy(std::integral_constant<std::size_t, 24>{});
+    default:
+      return copy(elem);
+  }
+}
+
+// f(first, last) over the slots [0, n) of a message buffer, less this rank's own [b, e) unless
+// `self`.
+template <class F>
+void for_slots(std::int64_t n, std::int64_t b, std::int64_t e, bool self, F f) {
+  if (self) return f(std::int64_t{0}, n);
+  f(std::int64_t{0}, b);
+  f(e, n);
+}
+
 int as_count(std::int64_t bytes) {
   if (bytes > INT_MAX)
     throw std::runtime_error("comm plan: message of " + std::to_string(bytes) +
@@ -33,11 +66,18 @@ int as_count(std::int64_t bytes) {
 }  // namespace
 
 CommEngine::CommEngine(MPI_Comm comm, std::span<const std::int64_t> dest_offsets,
-                       std::span<const int> dest_ranks, std::int64_t recv_base)
-    : recv_base_(recv_base) {
+                       std::span<const int> dest_ranks, std::int64_t recv_base) {
   MPI_Comm_dup(comm, &comm_);
   MPI_Comm_rank(comm_, &rank_);
   MPI_Comm_size(comm_, &size_);
+  replan(dest_offsets, dest_ranks, recv_base);
+}
+
+void CommEngine::replan(std::span<const std::int64_t> dest_offsets, std::span<const int> dest_ranks,
+                        std::int64_t recv_base) {
+  if (in_flight_ || device_)
+    throw std::logic_error("comm plan: replan() in flight or on device buffers");
+  recv_base_ = recv_base;
   n_items_ = static_cast<std::int64_t>(dest_offsets.size()) - 1;
   const std::int64_t n_items = n_items_;
   // Count sends per rank, then fill send slots by a counting sort (stable: item order).
@@ -61,6 +101,7 @@ CommEngine::CommEngine(MPI_Comm comm, std::span<const std::int64_t> dest_offsets
   MPI_Alltoall(count.data(), 1, MPI_INT64_T, rcount.data(), 1, MPI_INT64_T, comm_);
   recv_off_.assign(size_ + 1, 0);
   for (int r = 0; r < size_; ++r) recv_off_[r + 1] = recv_off_[r] + rcount[r];
+  nbrs_.clear();
   for (int r = 0; r < size_; ++r)
     if (r != rank_ && (count[r] > 0 || rcount[r] > 0)) nbrs_.push_back(r);
 }
@@ -201,6 +242,32 @@ std::span<const std::byte> CommEngine::finish_device() {
 }
 
 void CommEngine::begin(std::span<const CommField> src, Dir dir) {
+  pack(src, dir, true);
+  post(dir, true);
+}
+
+void CommEngine::finish(std::span<const CommField> dst, Dir dir) { unpack(dst, dir, true); }
+
+void CommEngine::forward(std::span<const CommField> src, std::span<const CommField> dst) {
+  bool same = src.size() == dst.size();
+  for (std::size_t j = 0; same && j < src.size(); ++j) same = src[j].elem == dst[j].elem;
+  if (!same) throw std::invalid_argument("comm plan: forward() fields differ");
+  check_fields(dst, recv_base_ + n_recv(), "destination");
+  pack(src, Dir::Forward, false);
+  post(Dir::Forward, false);
+  // This rank's own items, while the others are in flight.
+  const double t0 = MPI_Wtime();
+  const std::int64_t from = send_off_[rank_], to = recv_base_ + recv_off_[rank_];
+  for (std::size_t j = 0; j < src.size(); ++j)
+    copy_each(
+        0, send_off_[rank_ + 1] - from, src[j].elem,
+        [&](std::int64_t k) { return dst[j].data + (to + k) * dst[j].elem; },
+        [&](std::int64_t k) { return src[j].data + send_index_[from + k] * src[j].elem; });
+  seconds_.unpack += MPI_Wtime() - t0;
+  unpack(dst, Dir::Forward, false);
+}
+
+void CommEngine::pack(std::span<const CommField> src, Dir dir, bool self) {
   if (in_flight_) throw std::logic_error("comm plan: begin() while an exchange is in flight");
   const double t0 = MPI_Wtime();
   stride_ = 0;
@@ -210,27 +277,28 @@ void CommEngine::begin(std::span<const CommField> src, Dir dir) {
   const std::vector<std::int64_t>& so = fwd ? send_off_ : recv_off_;
   check_fields(src, fwd ? n_items_ : recv_base_ + n_recv(), "source");
   sendbuf_.resize(stride_ * so[size_]);
-  // Pack, item-major, slots in parallel. Bytes: stride per slot each way.
-  const std::int64_t ns = so[size_];
+  // Pack, item-major. Bytes: stride per slot each way.
   std::size_t off = 0;
   for (const CommField& f : src) {
-    for_each(HostExec{}, ns, [&](std::int64_t k) {
-      const std::int64_t item = fwd ? send_index_[k] : recv_base_ + k;
-      std::memcpy(&sendbuf_[k * stride_ + off], f.data + item * f.elem, f.elem);
+    for_slots(so[size_], so[rank_], so[rank_ + 1], self, [&](std::int64_t b, std::int64_t e) {
+      copy_each(
+          b, e, f.elem, [&](std::int64_t k) { return &sendbuf_[k * stride_ + off]; },
+          [&](std::int64_t k) {
+            return f.data + (fwd ? send_index_[k] : recv_base_ + k) * f.elem;
+          });
     });
     off += f.elem;
   }
   seconds_.pack += MPI_Wtime() - t0;
-  post(dir);
 }
 
-void CommEngine::post(Dir dir) {
+void CommEngine::post(Dir dir, bool self) {
   const double t0 = MPI_Wtime();
   const bool fwd = dir == Dir::Forward;
   const std::vector<std::int64_t>& so = fwd ? send_off_ : recv_off_;
   const std::vector<std::int64_t>& ro = fwd ? recv_off_ : send_off_;
   recvbuf_.resize(stride_ * ro[size_]);
-  // Post receives first, then sends; the self part is a copy.
+  // Post receives first, then sends; the self part is a copy (unless forward() copies it).
   reqs_.clear();
   last_bytes_ = 0;
   for (int r : nbrs_) {
@@ -249,7 +317,7 @@ void CommEngine::post(Dir dir) {
     last_bytes_ += n * stride_;
   }
   const std::int64_t nself = so[rank_ + 1] - so[rank_];
-  if (nself > 0)
+  if (self && nself > 0)
     std::memcpy(recvbuf_.data() + ro[rank_] * stride_, sendbuf_.data() + so[rank_] * stride_,
                 nself * stride_);
   total_bytes_ += last_bytes_;
@@ -277,7 +345,7 @@ void CommEngine::begin_packed() {
   if (device_)
     post_device();
   else
-    post(Dir::Forward);
+    post(Dir::Forward, true);
 }
 
 std::span<const std::byte> CommEngine::finish_packed() {
@@ -291,7 +359,7 @@ std::span<const std::byte> CommEngine::finish_packed() {
   return {recvbuf_.data(), stride_ * static_cast<std::size_t>(n_recv())};
 }
 
-void CommEngine::finish(std::span<const CommField> dst, Dir dir) {
+void CommEngine::unpack(std::span<const CommField> dst, Dir dir, bool self) {
   if (!in_flight_) throw std::logic_error("comm plan: finish() without begin()");
   if (dir != dir_) throw std::logic_error("comm plan: finish() in another direction");
   std::size_t stride = 0;
@@ -307,11 +375,14 @@ void CommEngine::finish(std::span<const CommField> dst, Dir dir) {
   check_fields(dst, fwd ? recv_base_ + n_recv() : n_items_, "destination");
   std::size_t off = 0;
   if (fwd) {
-    const std::int64_t nr = n_recv();
-    for (const CommField& f : dst) {  // slots in parallel
-      for_each(HostExec{}, nr, [&](std::int64_t k) {
-        std::memcpy(f.data + (recv_base_ + k) * f.elem, &recvbuf_[k * stride_ + off], f.elem);
-      });
+    for (const CommField& f : dst) {
+      for_slots(n_recv(), recv_off_[rank_], recv_off_[rank_ + 1], self,
+                [&](std::int64_t b, std::int64_t e) {
+                  copy_each(
+                      b, e, f.elem,
+                      [&](std::int64_t k) { return f.data + (recv_base_ + k) * f.elem; },
+                      [&](std::int64_t k) { return &recvbuf_[k * stride_ + off]; });
+                });
       off += f.elem;
     }
   } else {
@@ -383,14 +454,11 @@ std::vector<std::byte> CommEngine::exchange(std::span<const std::byte> send,
 }
 
 MigratePlan::MigratePlan(MPI_Comm comm, std::span<const int> dest,
-                         std::span<const std::uint64_t> gid)
-    : n_old_(static_cast<std::int64_t>(dest.size())) {
+                         std::span<const std::uint64_t> gid) {
   if (gid.size() != dest.size())
     throw std::invalid_argument("MigratePlan: " + std::to_string(dest.size()) +
                                 " destinations but " + std::to_string(gid.size()) + " ids");
-  std::vector<std::int64_t> offsets(dest.size() + 1);
-  for (std::size_t i = 0; i <= dest.size(); ++i) offsets[i] = static_cast<std::int64_t>(i);
-  engine_ = std::make_unique<CommEngine>(comm, offsets, dest, 0);
+  engine_ = std::make_unique<CommEngine>(comm, offsets_for(dest), dest, 0);
   new_gids_.resize(engine_->n_recv());
   const CommField s = comm_field(const_cast<std::uint64_t*>(gid.data()), n_old_);
   const CommField d = comm_field(new_gids_);
@@ -398,12 +466,27 @@ MigratePlan::MigratePlan(MPI_Comm comm, std::span<const int> dest,
   finish({&d, 1});
 }
 
+MigratePlan::MigratePlan(MPI_Comm comm, std::span<const int> dest)
+    : engine_(std::make_unique<CommEngine>(comm, offsets_for(dest), dest, 0)) {}
+
+void MigratePlan::replan(std::span<const int> dest) {
+  engine_->replan(offsets_for(dest), dest, 0);
+  new_gids_.clear();
+}
+
+std::span<const std::int64_t> MigratePlan::offsets_for(std::span<const int> dest) {
+  n_old_ = static_cast<std::int64_t>(dest.size());
+  const std::int64_t had = static_cast<std::int64_t>(offsets_.size());
+  offsets_.resize(n_old_ + 1);
+  for (std::int64_t i = had; i <= n_old_; ++i) offsets_[i] = i;
+  return offsets_;
+}
+
 HaloPlan::HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> offsets,
-                   std::span<const int> ranks, std::span<const std::uint64_t> gid)
+                   std::span<const int> ranks)
     : n_owned_(n_owned) {
-  if (static_cast<std::int64_t>(offsets.size()) != n_owned + 1 ||
-      static_cast<std::int64_t>(gid.size()) < n_owned)
-    throw std::invalid_argument("HaloPlan: offsets need n_owned + 1 entries and ids n_owned");
+  if (static_cast<std::int64_t>(offsets.size()) != n_owned + 1)
+    throw std::invalid_argument("HaloPlan: offsets need n_owned + 1 entries");
   int me = 0;
   MPI_Comm_rank(comm, &me);
   // Drop this rank and repeats from each item's list.
@@ -419,6 +502,13 @@ HaloPlan::HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int
     off[i + 1] = static_cast<std::int64_t>(dst.size());
   }
   engine_ = std::make_unique<CommEngine>(comm, off, dst, n_owned);
+}
+
+HaloPlan::HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> offsets,
+                   std::span<const int> ranks, std::span<const std::uint64_t> gid)
+    : HaloPlan(comm, n_owned, offsets, ranks) {
+  if (static_cast<std::int64_t>(gid.size()) < n_owned)
+    throw std::invalid_argument("HaloPlan: ids need n_owned entries");
   // Ghost ids: a gather of the id field into a scratch array of n_total items.
   std::vector<std::uint64_t> ids(n_total(), 0);
   std::copy(gid.begin(), gid.begin() + n_owned, ids.begin());

@@ -94,6 +94,11 @@ class CommEngine {
   // dest_ranks[dest_offsets[i] .. dest_offsets[i + 1]). Collective over comm.
   CommEngine(MPI_Comm comm, std::span<const std::int64_t> dest_offsets,
              std::span<const int> dest_ranks, std::int64_t recv_base);
+  // New lists, as a new engine would have them, keeping the duplicated communicator and the
+  // host message buffers (a caller that plans again allocates them once). Collective; none in
+  // flight, no device buffers (use_device).
+  void replan(std::span<const std::int64_t> dest_offsets, std::span<const int> dest_ranks,
+              std::int64_t recv_base);
   ~CommEngine();
   CommEngine(const CommEngine&) = delete;
   CommEngine& operator=(const CommEngine&) = delete;
@@ -101,6 +106,10 @@ class CommEngine {
   enum class Dir { Forward, Reverse };
   void begin(std::span<const CommField> src, Dir dir);
   void finish(std::span<const CommField> dst, Dir dir);
+  // begin(src, Forward) and finish(dst, Forward) in one, the items this rank sends to itself
+  // copied from src to dst directly while the others are in flight, not through the message
+  // buffers (a migration keeps most items where they are).
+  void forward(std::span<const CommField> src, std::span<const CommField> dst);
   bool in_flight() const { return in_flight_; }
 
   // Packed forward exchange, for callers that pack their own records (a GPU backend packs
@@ -174,7 +183,11 @@ class CommEngine {
   void post_device();
   std::span<const std::byte> finish_device();
   std::size_t stride_ = 0;
-  void post(Dir dir);  // posts receives and sends of the packed sendbuf_ (begin's second half)
+  // begin() and finish() without this rank's own slots when not `self` (forward()): packs
+  // src, posts receives and sends of the packed sendbuf_, waits and unpacks into dst.
+  void pack(std::span<const CommField> src, Dir dir, bool self);
+  void post(Dir dir, bool self);
+  void unpack(std::span<const CommField> dst, Dir dir, bool self);
   bool in_flight_ = false;
   Dir dir_ = Dir::Forward;
   std::int64_t last_bytes_ = 0, total_bytes_ = 0;
@@ -185,7 +198,13 @@ class CommEngine {
 // arrays hold n_new() items: those received, by source rank, then sender order.
 class MigratePlan {
  public:
+  // gid: the items' ids, sent along so that new_gids() names the received items.
   MigratePlan(MPI_Comm comm, std::span<const int> dest, std::span<const std::uint64_t> gid);
+  // Without ids (a caller that migrates them as one of its fields): new_gids() empty.
+  MigratePlan(MPI_Comm comm, std::span<const int> dest);
+  // A plan for new destinations (without ids) on the same engine: a caller that migrates
+  // repeatedly (a layout rebuild) keeps its communicator and message buffers. Collective.
+  void replan(std::span<const int> dest);
   std::int64_t n_old() const { return n_old_; }
   std::int64_t n_new() const { return engine_->n_recv(); }
   const std::vector<std::uint64_t>& new_gids() const { return new_gids_; }
@@ -193,19 +212,25 @@ class MigratePlan {
   // src fields have n_old() items, dst fields n_new(); they must be different arrays.
   void begin(std::span<const CommField> src) { engine_->begin(src, CommEngine::Dir::Forward); }
   void finish(std::span<const CommField> dst) { engine_->finish(dst, CommEngine::Dir::Forward); }
+  // Both in one; the items that stay are copied directly (CommEngine::forward).
+  void move(std::span<const CommField> src, std::span<const CommField> dst) {
+    engine_->forward(src, dst);
+  }
   // Blocking convenience: replaces v by its migrated contents.
   template <class T>
   void apply(std::vector<T>& v) {
     std::vector<T> out(static_cast<std::size_t>(n_new()));
     const CommField s = comm_field(v), d = comm_field(out);
-    begin({&s, 1});
-    finish({&d, 1});
+    move({&s, 1}, {&d, 1});
     v.swap(out);
   }
   const CommEngine& engine() const { return *engine_; }
 
  private:
+  // The engine's lists for dest: one destination per item (offsets 0, 1, ..., n_old_, kept).
+  std::span<const std::int64_t> offsets_for(std::span<const int> dest);
   std::int64_t n_old_ = 0;
+  std::vector<std::int64_t> offsets_;
   std::unique_ptr<CommEngine> engine_;
   std::vector<std::uint64_t> new_gids_;
 };
@@ -216,8 +241,12 @@ class MigratePlan {
 // repeats are ignored).
 class HaloPlan {
  public:
+  // gid: the owned items' ids, gathered so that ghost_gids() names the ghosts.
   HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> dest_offsets,
            std::span<const int> dest_ranks, std::span<const std::uint64_t> gid);
+  // Without ids (a caller that gathers them as one of its fields): ghost_gids() empty.
+  HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> dest_offsets,
+           std::span<const int> dest_ranks);
   std::int64_t n_owned() const { return n_owned_; }
   std::int64_t n_ghost() const { return engine_->n_recv(); }
   std::int64_t n_total() const { return n_owned_ + n_ghost(); }

@@ -42,6 +42,7 @@ class MpiFluidExchange final : public FluidExchange {
     MPI_Comm_dup(comm, &comm_);
     MPI_Comm_rank(comm_, &me_);
     MPI_Comm_size(comm_, &np_);
+    migrate_ = std::make_unique<MigratePlan>(comm_, std::span<const int>{});
   }
   ~MpiFluidExchange() override {
     halo_.reset();
@@ -57,27 +58,34 @@ class MpiFluidExchange final : public FluidExchange {
     const double t0 = MPI_Wtime();
     ++rebuilds_;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
-    std::vector<double> cost = p.cost;
-    if (cost.size() != p.size()) {
-      cost.resize(n);
-      for (std::int64_t i = 0; i < n; ++i) cost[i] = p.type[i] == kSphFluid ? 1.0 : kFluidWallCost;
+    // Each particle's curve key on the decomposition's grid (a new cut computes them anyway).
+    if (dec_.splitters.empty() || rebalance_) {
+      std::span<const double> cost = p.cost;
+      if (p.cost.size() != p.size()) {  // not measured yet
+        cost_.resize(n);
+        for_each(HostExec{}, n,
+                 [&](std::int64_t i) { cost_[i] = p.type[i] == kSphFluid ? 1.0 : kFluidWallCost; });
+        cost = cost_;
+      }
+      dec_ = balance(comm_, p.x, cost, curve_, max_cell_, &curve_key_);
+    } else {
+      grid_keys(dec_.grid, p.x, curve_key_);
     }
-    if (dec_.splitters.empty() || rebalance_) dec_ = balance(comm_, p.x, cost, curve_, max_cell_);
     rebalance_ = false;
 
     // Owned particles to the owners of their positions, into o_ (its storage reused).
     dest_.resize(n);
-    for_each(HostExec{}, n, [&](std::int64_t i) { dest_[i] = dec_.owner(p.x[i]); });
-    MigratePlan mp(comm_, dest_, p.gid);
-    resize(o_, mp.n_new());
-    mp.begin(fields_of(p));
-    mp.finish(fields_of(o_));
-    migrated_bytes_ += mp.engine().last_bytes();
-    const std::int64_t nown = mp.n_new();
+    for_each(HostExec{}, n,
+             [&](std::int64_t i) { dest_[i] = owner_of_key(dec_.splitters, curve_key_[i]); });
+    migrate_->replan(dest_);
+    resize(o_, migrate_->n_new());
+    migrate_->move(fields_of(p), fields_of(o_));
+    migrated_bytes_ += migrate_->engine().last_bytes();
+    const std::int64_t nown = migrate_->n_new();
 
     find_ghost_ranks(nown);
     halo_.reset();
-    halo_ = std::make_unique<HaloPlan>(comm_, nown, g_.off, g_.ranks, o_.gid);
+    halo_ = std::make_unique<HaloPlan>(comm_, nown, g_.off, g_.ranks);  // ids go as a field
     halo_->engine().use_device(space_ == Space::Cuda, 6 * sizeof(double));
     resize(o_, halo_->n_total());
     const auto f = fields_of(o_);
@@ -158,12 +166,19 @@ class MpiFluidExchange final : public FluidExchange {
   // and looked up.
   void find_ghost_ranks(std::int64_t nown) {
     GhostScratch& g = g_;
-    // The distinct band cells (in the order of their first particle) and each particle's.
+    // Each particle's band cell (on all threads), then the distinct cells in the order of their
+    // first particle: one lookup for a run of particles in the same cell.
+    g.key_of.resize(nown);
+    for_each(HostExec{}, nown, [&](std::int64_t i) { g.key_of[i] = cell_key(o_.x[i]); });
     g.cells.clear();
     g.cell_key.clear();
     g.cell_of.resize(nown);
     for (std::int64_t i = 0; i < nown; ++i) {
-      const std::uint64_t k = cell_key(o_.x[i]);
+      const std::uint64_t k = g.key_of[i];
+      if (i > 0 && k == g.key_of[i - 1]) {
+        g.cell_of[i] = g.cell_of[i - 1];
+        continue;
+      }
       g.cell_of[i] = g.cells.insert(k);
       if (g.cell_of[i] == static_cast<std::int64_t>(g.cell_key.size())) g.cell_key.push_back(k);
     }
@@ -246,8 +261,13 @@ class MpiFluidExchange final : public FluidExchange {
         if (hi[a] / s - lo[a] / s > 1) return false;
       return true;
     };
-    for (int l = g.order; l > 0 && !fits(); --l)
+    // Levels whose cells are at most half as wide as the box cannot fit (hi / s - lo / s >=
+    // (hi - lo) / s >= 2): skipped without the divisions of fits().
+    const std::uint32_t wide = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+    int l = g.order;
+    for (; l > 0 && 2 * std::uint64_t{s} <= wide; --l)
       s *= base, span *= std::uint64_t(base) * base * base;
+    for (; l > 0 && !fits(); --l) s *= base, span *= std::uint64_t(base) * base * base;
     if (!fits()) return false;
     for (std::uint32_t x = lo[0] / s; x <= hi[0] / s; ++x)
       for (std::uint32_t y = lo[1] / s; y <= hi[1] / s; ++y)
@@ -335,11 +355,13 @@ class MpiFluidExchange final : public FluidExchange {
   std::int64_t evaluations_ = 0, rebuilds_ = 0;
   std::int64_t halo_bytes_ = 0, migrated_bytes_ = 0, band_bytes_ = 0;
   Decomposition dec_;
+  std::unique_ptr<MigratePlan> migrate_;  // re-planned at each distribute(): buffers kept
   std::unique_ptr<HaloPlan> halo_;
   // distribute()'s work arrays, kept so that a rebuild reuses their storage.
   struct GhostScratch {
     KeyIndex cells;                       // the distinct band cells of the owned particles
     std::vector<std::uint64_t> cell_key;  // per cell
+    std::vector<std::uint64_t> key_of;    // per particle: its cell's key
     std::vector<std::int64_t> cell_of;    // per particle: its cell
     std::vector<std::uint8_t> border;     // per cell: not interior
     KeyIndex in_piece;                    // interior(): tree cells tested, and the answers
@@ -350,8 +372,10 @@ class MpiFluidExchange final : public FluidExchange {
     std::vector<std::int64_t> cell_off, off;  // per cell / per particle: a range of ranks
     std::vector<int> cell_ranks, ranks;
   };
-  std::vector<int> dest_;  // per particle: its new owner
-  FluidParticles o_;       // the new layout being built (between calls: the last input)
+  std::vector<double> cost_;              // per particle: its cost before any is measured
+  std::vector<std::uint64_t> curve_key_;  // per particle: its key on dec_.grid
+  std::vector<int> dest_;                 // per particle: its new owner
+  FluidParticles o_;  // the new layout being built (between calls: the last input)
   GhostScratch g_;
 };
 

@@ -75,34 +75,41 @@ QDEMSPH_HD void morton_cell(std::uint64_t key, std::uint32_t& x, std::uint32_t& 
 
 // ---- Hilbert (Skilling) ----------------------------------------------------------------
 
-// Key of cell (x, y, z) on a 2^order grid, 1 <= order <= 21.
+// One step of Skilling's inverse undo for bit Q (P = Q - 1): the bits P of x0 inverted when bit
+// Q of xi is set, else exchanged with those of xi. Without branches: masks instead of ifs on
+// coordinate bits, which a processor cannot predict.
+QDEMSPH_HD void hilbert_undo(std::uint32_t& x0, std::uint32_t& xi, std::uint32_t Q,
+                             std::uint32_t P) {
+  const std::uint32_t set = 0u - ((xi & Q) != 0);  // all ones when bit Q is set
+  const std::uint32_t t = (x0 ^ xi) & P & ~set;
+  x0 ^= t ^ (P & set);
+  xi ^= t;
+}
+
+// Key of cell (x, y, z) on a 2^order grid, 1 <= order <= 21. At order 16 on the 2-core VM
+// (-O3): ~50 ns a key, against ~75 ns with Skilling's ifs on cells in spatial order and ~105 on
+// random cells.
 QDEMSPH_HD std::uint64_t hilbert_key(std::uint32_t x, std::uint32_t y, std::uint32_t z, int order) {
-  std::uint32_t X[3] = {x, y, z};
-  const std::uint32_t M = 1u << (order - 1);
-  // Inverse undo: for each bit from the top, invert or exchange the lower bits.
-  for (std::uint32_t Q = M; Q > 1; Q >>= 1) {
+  // Inverse undo, for each bit from the top (the coordinates in registers, not an array).
+  for (std::uint32_t Q = 1u << (order - 1); Q > 1; Q >>= 1) {
     const std::uint32_t P = Q - 1;
-    for (int i = 0; i < 3; ++i) {
-      if (X[i] & Q) {
-        X[0] ^= P;
-      } else {
-        const std::uint32_t t = (X[0] ^ X[i]) & P;
-        X[0] ^= t;
-        X[i] ^= t;
-      }
-    }
+    x ^= P & (0u - ((x & Q) != 0));  // against itself: inverted or nothing
+    hilbert_undo(x, y, Q, P);
+    hilbert_undo(x, z, Q, P);
   }
   // Gray encode.
-  X[1] ^= X[0];
-  X[2] ^= X[1];
-  std::uint32_t t = 0;
-  for (std::uint32_t Q = M; Q > 1; Q >>= 1)
-    if (X[2] & Q) t ^= Q - 1;
-  X[0] ^= t;
-  X[1] ^= t;
-  X[2] ^= t;
-  // The transposed index: bit b of the key triple j is bit j of X[0], X[1], X[2].
-  return morton_key(X[0], X[1], X[2]);
+  y ^= x;
+  z ^= y;
+  // t = the XOR of Q - 1 over the set bits Q > 1 of z: bit j of t is the parity of the bits of
+  // z above j (a suffix XOR of z >> 1).
+  std::uint32_t t = z >> 1;
+  t ^= t >> 1;
+  t ^= t >> 2;
+  t ^= t >> 4;
+  t ^= t >> 8;
+  t ^= t >> 16;
+  // The transposed index: bit b of the key triple j is bit j of x, y, z.
+  return morton_key(x ^ t, y ^ t, z ^ t);
 }
 
 QDEMSPH_HD void hilbert_cell(std::uint64_t key, int order, std::uint32_t& x, std::uint32_t& y,

@@ -23,6 +23,7 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <initializer_list>
 #include <memory>
@@ -33,6 +34,7 @@
 #include "core/error.hpp"
 #include "core/error_flag.hpp"
 #include "core/memory.hpp"
+#include "core/radix_sort.hpp"
 #include "core/timers.hpp"
 #include "neighbor/cell_grid.hpp"
 #include "physics/sph_boundary.hpp"
@@ -390,28 +392,26 @@ class SphStage final : public FluidStage {
   // Distributed: the owned particles of every rank on rank 0, in the order of their keys: the
   // one-rank order, so a checkpoint of N ranks is the one-rank file (other ranks: empty).
   FluidState save_state() override {
-    FluidState s;
-    s.x = x_.to_host();
-    s.v = v_.to_host();
-    s.a = a_.to_host();
-    s.rho = rho_.to_host();
-    s.p = p_.to_host();
-    s.m = m_.to_host();
-    s.type = type_.to_host();
-    s.gid = gid_.to_host();
-    if (!ex_) return s;
-    const auto slot = slot_.to_host();
-    const auto key = ex_->gather(owned(key_.to_host(), slot));
-    std::vector<std::size_t> ord(key.size());
-    std::iota(ord.begin(), ord.end(), std::size_t{0});
-    std::sort(ord.begin(), ord.end(), [&](auto a, auto b) { return key[a] < key[b]; });
-    auto all = [&](const auto& v) {
-      const auto g = ex_->gather(owned(v, slot));
-      std::remove_cvref_t<decltype(v)> o(g.size());
-      for (std::size_t k = 0; k < ord.size(); ++k) o[k] = g[ord[k]];
+    if (!ex_)
+      return {x_.to_host(), v_.to_host(), a_.to_host(),    rho_.to_host(),
+              p_.to_host(), m_.to_host(), type_.to_host(), gid_.to_host()};
+    pick_owned();
+    std::vector<std::uint64_t> mine;
+    take_owned(key_.cview(), mine);
+    const auto key = ex_->gather(mine);
+    by_key_.resize(key.size());
+    for (std::size_t k = 0; k < key.size(); ++k) by_key_[k] = {key[k], std::int64_t(k)};
+    radix_sort(by_key_, by_key_scratch_);
+    auto all = [&](auto view) {
+      std::vector<std::remove_cvref_t<decltype(view[0])>> o;
+      take_owned(view, o);
+      const auto g = ex_->gather(o);
+      o.resize(g.size());
+      for (std::size_t k = 0; k < g.size(); ++k) o[k] = g[by_key_[k].second];
       return o;
     };
-    return {all(s.x), all(s.v), all(s.a), all(s.rho), all(s.p), all(s.m), all(s.type), all(s.gid)};
+    return {all(x_.cview()), all(v_.cview()), all(a_.cview()),    all(rho_.cview()),
+            all(p_.cview()), all(m_.cview()), all(type_.cview()), all(gid_.cview())};
   }
 
   // Distributed: every rank passes the whole state and keeps its contiguous share (the next
@@ -517,47 +517,61 @@ class SphStage final : public FluidStage {
   // ghosts; the result laid out in the order of the keys (the one-rank order restricted to
   // this rank's particles), slot = its place in the exchange's layout.
   void redistribute() {
-    const auto slot = slot_.to_host();
-    FluidParticles q{owned(x_.to_host(), slot),    owned(v_.to_host(), slot),
-                     owned(rho_.to_host(), slot),  owned(m_.to_host(), slot),
-                     owned(type_.to_host(), slot), owned(gid_.to_host(), slot),
-                     owned(key_.to_host(), slot),  {}};
-    if (laid_out_) q.cost = owned(cost_.to_host(), slot);  // measured by the last compute()
+    FluidParticles& q = q_;  // its storage reused
+    pick_owned();
+    take_owned(x_.cview(), q.x);
+    take_owned(v_.cview(), q.v);
+    take_owned(rho_.cview(), q.rho);
+    take_owned(m_.cview(), q.m);
+    take_owned(type_.cview(), q.type);
+    take_owned(gid_.cview(), q.gid);
+    take_owned(key_.cview(), q.key);
+    q.cost.clear();
+    if (laid_out_) take_owned(cost_.cview(), q.cost);  // measured by the last compute()
     const std::int64_t nown = ex_->distribute(q);
-    // (key, slot) pairs sorted: contiguous, unlike an index sort comparing through q.key (keys
-    // are unique: each is its owner's place for the particle).
-    std::vector<std::pair<std::uint64_t, std::int64_t>> by_key(q.size());
-    for (std::size_t k = 0; k < q.size(); ++k) by_key[k] = {q.key[k], static_cast<std::int64_t>(k)};
-    std::sort(by_key.begin(), by_key.end());
-    std::vector<std::int64_t> ord(q.size());
-    for (std::size_t k = 0; k < q.size(); ++k) ord[k] = by_key[k].second;
-    auto in_order = [&](const auto& v) {
-      std::remove_cvref_t<decltype(v)> o(v.size());
-      for (std::size_t k = 0; k < ord.size(); ++k) o[k] = v[ord[k]];
-      return o;
-    };
-    set_owned(in_order(q.x), in_order(q.v), in_order(q.rho), in_order(q.m), in_order(q.type),
-              in_order(q.gid), in_order(q.key));
-    slot_.assign(ord);
+    const std::int64_t n = static_cast<std::int64_t>(q.size());
+    // The layout slots in the order of the keys: (key, slot) records sorted by radix (keys are
+    // unique: each is its owner's place for the particle).
+    by_key_.resize(n);
+    for_each(HostExec{}, n, [&](std::int64_t k) { by_key_[k] = {q.key[k], k}; });
+    const std::uint64_t top = q.key.empty() ? 0 : *std::max_element(q.key.begin(), q.key.end());
+    radix_sort(by_key_, by_key_scratch_, std::bit_width(top));
+    ord_.resize(n);
+    for_each(HostExec{}, n, [&](std::int64_t k) { ord_[k] = by_key_[k].second; });
+    // The layout, then each particle i in the order of the keys from layout slot ord[i].
+    set_owned(q.x, q.v, q.rho, q.m, q.type, q.gid, q.key);
     n_own_ = nown;
+    x0_.resize(nown);  // the owned positions by slot, before the permutation
+    const Vec3CView x = x_.cview();
+    const Vec3View x0 = x0_.view();
+    for (auto [d, src] : {std::pair{x0.x, x.x}, std::pair{x0.y, x.y}, std::pair{x0.z, x.z}})
+      space_copy(d, S, src, S, nown * sizeof(double));
+    slot_.assign(ord_);
+    const auto to = slot_.cview();
+    permute3(x_, to);
+    permute3(v_, to);
+    permute(rho_, tmpd_, to);
+    permute(m_, tmpd_, to);
+    permute(type_, tmpt_, to);
+    permute(gid_, tmpu_, to);
+    permute(key_, tmpu_, to);
     send_.assign(ex_->send_slots());
     inv_.resize(n_);
     cost_.resize(n_);
-    x0_.assign(std::vector<Vec3>(q.x.begin(), q.x.begin() + nown));
     laid_out_ = true;
     // The neighbour grid: the window of the whole box's cells that holds this rank's particles,
     // widened by the cells they can reach while the layout stands (skin / 2), so none leaves it
     // (coordinates outside a window are clamped into its border cells). A periodic z keeps all
     // its cells (they wrap: a rank at the seam holds ghosts from the other side).
     const int margin = static_cast<int>(std::ceil(0.5 * ex_->skin() * grid_all_.inv_cell));
-    int lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = grid_all_.n[a] - 1;
-      for (const Vec3& p : q.x) {
+    int lo[3], hi[3] = {0, 0, 0};
+    for (int a = 0; a < 3; ++a) lo[a] = q.x.empty() ? 0 : grid_all_.n[a] - 1;  // none: one cell
+    for (const Vec3& p : q.x)
+      for (int a = 0; a < 3; ++a) {
         const int c = grid_all_.coord(p[a], a);
         lo[a] = std::min(lo[a], c), hi[a] = std::max(hi[a], c);
       }
-      if (q.x.empty()) lo[a] = 0;  // no particle: one cell
+    for (int a = 0; a < 3; ++a) {
       lo[a] = std::max(lo[a] - margin, 0);
       hi[a] = std::min(std::max(hi[a], lo[a]) + margin, grid_all_.n[a] - 1);
       if (a == 2 && grid_all_.period_z > 0) lo[a] = 0, hi[a] = grid_all_.n[a] - 1;
@@ -565,7 +579,6 @@ class SphStage final : public FluidStage {
     grid_ = grid_all_.window(lo, hi);
     start_.resize(kSphGroups * grid_.count() + 1);
   }
-
   // Distributed: the owned particles' cost in the last compute() (0 before the first).
   double owned_cost() {
     const auto c = cost_.cview();
@@ -665,15 +678,44 @@ class SphStage final : public FluidStage {
   }
 
  private:
-  // The entries of the owned particles (slot < n_own_) of a host copy of a local array
-  // (compacted in place: a fresh copy from to_host() is not copied again).
+  // pick_ = the owned particles (slot < n_own_), in local order.
+  void pick_owned() {
+    const std::int64_t* slot = host_readable(slot_.cview().p, n_, 0);
+    pick_.clear();
+    for (std::int64_t i = 0; i < n_; ++i)
+      if (slot[i] < n_own_) pick_.push_back(i);
+  }
+  // out = the owned particles' entries (pick_) of a local array: read in place on the host,
+  // through one host copy from a device.
   template <class T>
-  std::vector<T> owned(std::vector<T> v, const std::vector<std::int64_t>& slot) const {
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < v.size(); ++i)
-      if (slot[i] < n_own_) v[k++] = v[i];
-    v.resize(k);
-    return v;
+  void take_owned(View<const T> v, std::vector<T>& out) {
+    const T* h = host_readable(v.p, v.n, 0);
+    out.resize(pick_.size());
+    for_each(HostExec{}, static_cast<std::int64_t>(pick_.size()),
+             [&](std::int64_t k) { out[k] = h[pick_[k]]; });
+  }
+  void take_owned(Vec3CView v, std::vector<Vec3>& out) {
+    const double* h[3] = {host_readable(v.x, v.n, 0), host_readable(v.y, v.n, 1),
+                          host_readable(v.z, v.n, 2)};
+    out.resize(pick_.size());
+    for_each(HostExec{}, static_cast<std::int64_t>(pick_.size()), [&](std::int64_t k) {
+      const std::int64_t i = pick_[k];
+      out[k] = {h[0][i], h[1][i], h[2][i]};
+    });
+  }
+  // The n entries at p where the host reads them: p itself, or a host copy of a device array
+  // (part 0, 1 or 2 of the staging bytes, so that a Vec3's three components are there at once).
+  template <class T>
+  const T* host_readable(const T* p, std::int64_t n, int part) {
+    if constexpr (S == Space::Host) {
+      return p;
+    } else {
+      const std::size_t bytes = sizeof(T) * n, each = (bytes + 63) / 64 * 64;
+      if (staging_.size() < 3 * each) staging_.resize(3 * each);
+      std::byte* at = staging_.data() + part * each;
+      space_copy(at, Space::Host, p, S, bytes);
+      return reinterpret_cast<const T*>(at);
+    }
   }
 
   // The rank's particles (all owned, slot = index); the per-step arrays sized to them.
@@ -724,6 +766,12 @@ class SphStage final : public FluidStage {
   CellGrid grid_all_;             // the whole fluid box
   CellGrid grid_;                 // the cells searched: the whole box, or a rank's window of it
   Buffer<std::int64_t> keys_{S}, start_{S}, order_{S}, scratch_{S};
+  // Distributed: redistribute()'s host work arrays, kept so that a rebuild reuses their storage.
+  FluidParticles q_;                // the owned particles out, this rank's particles back
+  std::vector<std::int64_t> pick_;  // the owned particles' indices (pick_owned())
+  std::vector<std::int64_t> ord_;   // the layout slots in the order of the keys
+  std::vector<std::pair<std::uint64_t, std::int64_t>> by_key_, by_key_scratch_;
+  std::vector<std::byte> staging_;                 // a GPU stage's arrays copied out
   std::unique_ptr<SolidCoupling<Exec>> coupling_;  // null without bodies
   std::unique_ptr<FluidExchange> ex_;              // null on one rank
   // Distributed: the layout's upkeep inside compute(), device work included: "sph.halo" (the

@@ -183,6 +183,35 @@ TEST(MigratePlan, EveryIdOnceWithItsPayload) {
   }
 }
 
+TEST(MigratePlan, ReplannedWithIdsAsAField) {
+  // One plan without ids, planned again for each decomposition (and once with every item to
+  // the last rank), moving with move(): the ids travel as a field; each result is a new plan's.
+  Items it = initial_items();
+  MigratePlan plan(MPI_COMM_WORLD, std::span<const int>{});
+  const int p = size_of();
+  const std::pair<Curve, int> curves[] = {
+      {Curve::Hilbert, 4}, {Curve::Morton, 5}, {Curve::Hilbert, 0}, {Curve::Peano, 3}};
+  for (auto [curve, order] : curves) {
+    const Decomp d = order > 0 ? decompose(it, curve, order) : Decomp{};
+    std::vector<int> dest(it.size(), p - 1);  // order 0: everything to the last rank
+    if (order > 0)
+      for (std::int64_t i = 0; i < it.size(); ++i) dest[i] = d.owner({it.x[i], it.y[i], it.z[i]});
+    plan.replan(dest);
+    EXPECT_TRUE(plan.new_gids().empty());
+    Items out;
+    for (auto* v : {&out.x, &out.y, &out.z, &out.pay}) v->assign(plan.n_new(), -1.0);
+    out.gid.assign(plan.n_new(), 0);
+    const CommField s[5] = {comm_field(it.x), comm_field(it.y), comm_field(it.z),
+                            comm_field(it.pay), comm_field(it.gid)};
+    const CommField t[5] = {comm_field(out.x), comm_field(out.y), comm_field(out.z),
+                            comm_field(out.pay), comm_field(out.gid)};
+    plan.move(s, t);  // those that stay copied directly
+    it = out;
+    SCOPED_TRACE(order);
+    if (order > 0) check_migrated(it, d);
+  }
+}
+
 TEST(MigratePlan, BlockingApplyAndEmptyRanks) {
   // Everything to the last rank, then back to rank 0 with apply().
   Items it = initial_items();

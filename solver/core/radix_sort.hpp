@@ -1,0 +1,67 @@
+// Host sort of (key, value) records by a 64-bit key: LSD radix, 8 bits a pass, on OpenMP
+// threads. For the host work of a layout rebuild (parallel/balance.cpp: items by curve key;
+// sph/sph_stage.hpp: particles by order key), where a comparison sort was serial.
+//
+// Stable, so the result is the same for any thread count: each thread counts the digits of its
+// block, the counts are scanned in (digit, thread) order, and each thread scatters its block in
+// order. A pass whose digit is the same in every key moves nothing. Bytes: one read of the
+// records to count and one read and write to scatter per pass, bits / 8 passes.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "core/exec_host.hpp"
+
+namespace qdemsph {
+
+// Sorts a by key (the low `bits` bits of each key; the others must be 0). tmp: scratch,
+// resized to a's size (kept by a caller that sorts again).
+template <class V>
+void radix_sort(std::vector<std::pair<std::uint64_t, V>>& a,
+                std::vector<std::pair<std::uint64_t, V>>& tmp, int bits = 64) {
+  const std::int64_t n = static_cast<std::int64_t>(a.size());
+  tmp.resize(a.size());
+  int most = 1;
+#ifdef _OPENMP
+  if (n >= kMinParallel) most = omp_get_max_threads();
+#endif
+  std::vector<std::int64_t> count(256 * static_cast<std::size_t>(most));  // per (thread, digit)
+  for (int shift = 0; shift < bits; shift += 8) {
+    bool moves = true;
+#pragma omp parallel num_threads(most) if (most > 1)
+    {
+      int nt = 1, t = 0;
+#ifdef _OPENMP
+      nt = omp_get_num_threads(), t = omp_get_thread_num();
+#endif
+      const std::int64_t b = n * t / nt, e = n * (t + 1) / nt;
+      std::int64_t* c = &count[256 * t];
+      std::fill(c, c + 256, std::int64_t{0});
+      for (std::int64_t i = b; i < e; ++i) ++c[(a[i].first >> shift) & 255];
+#pragma omp barrier
+#pragma omp single
+      {
+        std::int64_t s = 0;
+        for (int d = 0; d < 256; ++d)
+          for (int u = 0; u < nt; ++u) {
+            const std::int64_t k = count[256 * u + d];
+            if (k == n) moves = false;
+            count[256 * u + d] = s;
+            s += k;
+          }
+      }  // implied barrier
+      if (moves)
+        for (std::int64_t i = b; i < e; ++i) tmp[c[(a[i].first >> shift) & 255]++] = a[i];
+    }
+    if (moves) a.swap(tmp);
+  }
+}
+
+}  // namespace qdemsph

@@ -1,0 +1,60 @@
+// The host radix sort (core/radix_sort.hpp): the stable order by key (records of equal keys in
+// their input order), on one thread and on several, for keys of a few bits to all 64.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <vector>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "core/radix_sort.hpp"
+
+using namespace qdemsph;
+
+namespace {
+
+using Records = std::vector<std::pair<std::uint64_t, std::int64_t>>;
+
+Records sorted_by(int threads, Records a, int bits) {
+#ifdef _OPENMP
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(threads);
+#endif
+  Records tmp;
+  radix_sort(a, tmp, bits);
+#ifdef _OPENMP
+  omp_set_num_threads(before);
+#endif
+  return a;
+}
+
+}  // namespace
+
+TEST(RadixSort, StableOrderOnAnyThreadCount) {
+  std::mt19937_64 rng(7);
+  for (std::int64_t n : {0, 1, 1000, 100000})
+    for (int bits : {8, 20, 48, 64}) {
+      Records a(n);
+      for (std::int64_t i = 0; i < n; ++i) {
+        // Few distinct keys at 8 bits (many equal), spread over all the bits otherwise.
+        const std::uint64_t k = bits == 64 ? rng() : rng() & ((std::uint64_t{1} << bits) - 1);
+        a[i] = {k, i};
+      }
+      Records want = a;
+      std::stable_sort(want.begin(), want.end(),
+                       [](const auto& x, const auto& y) { return x.first < y.first; });
+      EXPECT_EQ(sorted_by(1, a, bits), want) << n << " records, " << bits << " bits";
+      EXPECT_EQ(sorted_by(3, a, bits), want) << n << " records, " << bits << " bits";
+    }
+}
+
+TEST(RadixSort, SkipsADigitCommonToAllKeys) {
+  // Keys that differ only in their second byte: the first pass moves nothing.
+  Records a = {{0x300, 0}, {0x100, 1}, {0x200, 2}, {0x100, 3}};
+  Records tmp;
+  radix_sort(a, tmp, 16);
+  EXPECT_EQ(a, (Records{{0x100, 1}, {0x100, 3}, {0x200, 2}, {0x300, 0}}));
+}
