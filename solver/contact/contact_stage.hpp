@@ -87,30 +87,6 @@ struct Evaluator {
     const int k = anchor_slot(type, v, *this);
     return k >= 0 && v[k] < nfv;
   }
-  // Whether another rank evaluates every edge-edge record of surface triangles with vertices
-  // ta and tb: neither has an owned vertex, or one's vertices are all ghosts with global ids
-  // below every owned vertex of the other (each edge pair then has a ghost below its owned
-  // ends: the anchor). Decided once per triangle pair, so of a pair across a border only the
-  // rank evaluating its edge records runs their distance tests (the same records either way).
-  QDEMSPH_HD bool edges_elsewhere(const int* ta, const int* tb) const {
-    if (all) return false;
-    const bool oa = ta[0] < nfv || ta[1] < nfv || ta[2] < nfv;
-    const bool ob = tb[0] < nfv || tb[1] < nfv || tb[2] < nfv;
-    if (!oa && !ob) return true;
-    return (ob && ghosts_below(ta, tb)) || (oa && ghosts_below(tb, ta));
-  }
-
- private:
-  QDEMSPH_HD bool ghosts_below(const int* g, const int* o) const {
-    std::uint64_t top = 0;
-    for (int k = 0; k < 3; ++k) {
-      if (!ghost(g[k])) return false;
-      top = gid(g[k]) > top ? gid(g[k]) : top;
-    }
-    for (int k = 0; k < 3; ++k)
-      if (o[k] < nfv && gid(o[k]) < top) return false;
-    return true;
-  }
 };
 static_assert(std::is_trivially_copyable_v<Evaluator>);
 
@@ -192,10 +168,6 @@ struct ContactTopology {
       }
     }
     // Edge-edge.
-    if (own_e_off[a] == own_e_off[a + 1] || own_e_off[b] == own_e_off[b + 1]) return;
-    const int va[3] = {tri_vertex(a, 0), tri_vertex(a, 1), tri_vertex(a, 2)},
-              vb[3] = {tri_vertex(b, 0), tri_vertex(b, 1), tri_vertex(b, 2)};
-    if (eval.edges_elsewhere(va, vb)) return;
     for (std::int64_t qa = own_e_off[a]; qa < own_e_off[a + 1]; ++qa)
       for (std::int64_t qb = own_e_off[b]; qb < own_e_off[b + 1]; ++qb) {
         const int ea = own_e[qa], eb = own_e[qb];

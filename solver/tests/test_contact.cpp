@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstring>
 
-#include "contact/contact_stage.hpp"
 #include "integrate/stepper.hpp"
 #include "mesh/gmsh_io.hpp"
 #include "scene_fixture.hpp"
@@ -341,46 +340,4 @@ bodies: [{name: c, material: m, mesh: {type: box, origin: [0, 0, 0.000999], size
   EXPECT_LT(b.last.kinetic, 1e-3 * b.first.kinetic) << "the cube did not stop";
   EXPECT_NEAR(b.last.contact_dissipated / b.first.kinetic, 1.0, 0.01);
   EXPECT_LT(b.drift, 1e-3);
-}
-
-// A rank skips the edge tests of a triangle pair only when every edge pair's record is anchored
-// on another rank: checked against owns() over all nine edge pairs, for every way of giving
-// the six vertices to this rank (owned), another (ghost) or a fixed body, and two orders of
-// their global ids.
-TEST(Contact, EdgeTestsSkippedOnlyWhereAnotherRankAnchorsThem) {
-  // Local vertices: [0, 6) owned, [6, 12) ghosts, [12, 18) of a fixed body (body 1).
-  const std::int64_t nfv = 6;
-  std::vector<std::uint64_t> gid(18);
-  std::vector<std::int32_t> body(18, 0);
-  for (int k = 12; k < 18; ++k) body[k] = 1;
-  const std::vector<std::int32_t> fixed = {0, 1};
-  const Evaluator ev{{gid.data(), 18}, {body.data(), 18}, {fixed.data(), 2}, nfv, false};
-  int skipped = 0;
-  for (int order = 0; order < 2; ++order) {
-    for (int k = 0; k < 18; ++k) gid[k] = order == 0 ? 100 + (7 * k) % 18 : 200 - k;
-    for (int code = 0; code < 729; ++code) {  // 3^6 roles of the six corners
-      int v[6];
-      for (int k = 0, c = code; k < 6; ++k, c /= 3) v[k] = 6 * (c % 3) + k;
-      const int* ta = v;
-      const int* tb = v + 3;
-      bool any_here = false;
-      for (int ea = 0; ea < 3; ++ea)
-        for (int eb = 0; eb < 3; ++eb) {
-          const std::int32_t ends[4] = {ta[ea], ta[(ea + 1) % 3], tb[eb], tb[(eb + 1) % 3]};
-          any_here = any_here || ev.owns(kEdgeEdge, ends);
-        }
-      if (ev.edges_elsewhere(ta, tb)) {
-        EXPECT_FALSE(any_here) << "roles " << code << ", id order " << order;
-        ++skipped;
-      }
-    }
-  }
-  EXPECT_GT(skipped, 0);
-  // A border pair: this rank's triangle against one of the other rank's, lower ids there.
-  for (int k = 0; k < 18; ++k) gid[k] = k < 6 ? 50 + k : k;
-  const int mine[3] = {0, 1, 2}, theirs[3] = {6, 7, 8};
-  EXPECT_TRUE(ev.edges_elsewhere(mine, theirs));
-  EXPECT_TRUE(ev.edges_elsewhere(theirs, mine));
-  for (int k = 0; k < 18; ++k) gid[k] = k < 6 ? k : 50 + k;  // lower ids here: evaluated here
-  EXPECT_FALSE(ev.edges_elsewhere(mine, theirs));
 }
