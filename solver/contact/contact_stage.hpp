@@ -254,6 +254,18 @@ class ContactStage {
  public:
   ContactStage() : timers_([] { exec_sync(Exec{}); }) {}
 
+  // Rows of K ids as K columns (entry k of row i at k * rows + i), built on the host threads.
+  template <std::size_t K>
+  void upload_columns(Buffer<std::int32_t>& b,
+                      const std::vector<std::array<std::int32_t, K>>& rows) {
+    const auto n = static_cast<std::int64_t>(rows.size());
+    write_on_host(b, static_cast<std::int64_t>(K) * n, stage_, [&](std::int32_t* out) {
+      for_each(HostExec{}, n, [&](std::int64_t i) {
+        for (std::size_t k = 0; k < K; ++k) out[static_cast<std::int64_t>(k) * n + i] = rows[i][k];
+      });
+    });
+  }
+
   // The model's contact topology, and a fresh start (no history, pair list or counters); a
   // stage uploaded again keeps its storage (a distributed rank's rebuilt model).
   void upload(const Model& m) {
@@ -276,27 +288,11 @@ class ContactStage {
     kt_ratio_ = c.kt_ratio;
     skin_setting_ = c.skin;
     nm_ = c.n_mat;
-    const std::int64_t ntri = ntri_, ne = ne_, np = np_, nw = nw_;
-    write_on_host(tri_v_, 3 * ntri, stage_, [&](std::int32_t* tv) {
-      for_each(HostExec{}, ntri, [&](std::int64_t s) {
-        for (int k = 0; k < 3; ++k) tv[k * ntri + s] = c.tri_v[s][k];
-      });
-    });
-    write_on_host(edge_v_, 2 * ne, stage_, [&](std::int32_t* ev) {
-      for_each(HostExec{}, ne, [&](std::int64_t e) {
-        for (int k = 0; k < 2; ++k) ev[k * ne + e] = c.edges[e][k];
-      });
-    });
-    write_on_host(edge_tri_, 2 * ne, stage_, [&](std::int32_t* et) {
-      for_each(HostExec{}, ne, [&](std::int64_t e) {
-        for (int k = 0; k < 2; ++k) et[k * ne + e] = c.edge_tri[e][k];
-      });
-    });
-    write_on_host(prim_v_, 4 * np, stage_, [&](std::int32_t* pv) {
-      for_each(HostExec{}, np, [&](std::int64_t p) {
-        for (int k = 0; k < 4; ++k) pv[k * np + p] = c.prim_v[p][k];
-      });
-    });
+    const std::int64_t nw = nw_;
+    upload_columns(tri_v_, c.tri_v);
+    upload_columns(edge_v_, c.edges);
+    upload_columns(edge_tri_, c.edge_tri);
+    upload_columns(prim_v_, c.prim_v);
     tri_n_.resize(ntri_);
     tri_body_.assign(c.tri_body);
     prim_body_.assign(c.prim_body);

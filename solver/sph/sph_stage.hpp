@@ -466,12 +466,7 @@ class SphStage final : public FluidStage {
     const auto ord = order_.cview();
     // a, p and drho are not carried: compute() rewrites them (fluid: density, EOS and force
     // passes; boundary: Adami) before anything reads them.
-    permute3(x_, ord);
-    permute3(v_, ord);
-    permute(rho_, tmpd_, ord);
-    permute(m_, tmpd_, ord);
-    permute(type_, tmpt_, ord);
-    permute(gid_, tmpu_, ord);
+    permute_state(ord);
     permute(slot_, tmpi_, ord);
     // The order key of each particle: its bucket (in the whole box's grid) and its place in it.
     const auto key = key_.view();
@@ -503,6 +498,15 @@ class SphStage final : public FluidStage {
     for_each(
         Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) { dst[i] = src[ord[i]]; });
     b.swap(tmp);
+  }
+  // The particles' carried state (x, v, rho, m, type, gid) into the order ord.
+  void permute_state(View<const std::int64_t> ord) {
+    permute3(x_, ord);
+    permute3(v_, ord);
+    permute(rho_, tmpd_, ord);
+    permute(m_, tmpd_, ord);
+    permute(type_, tmpt_, ord);
+    permute(gid_, tmpu_, ord);
   }
   void permute3(Vec3Buffer& b, View<const std::int64_t> ord) {
     if (tmp3_.size() != n_) tmp3_.resize(n_);
@@ -548,12 +552,7 @@ class SphStage final : public FluidStage {
       space_copy(d, S, src, S, nown * sizeof(double));
     slot_.assign(ord_);
     const auto to = slot_.cview();
-    permute3(x_, to);
-    permute3(v_, to);
-    permute(rho_, tmpd_, to);
-    permute(m_, tmpd_, to);
-    permute(type_, tmpt_, to);
-    permute(gid_, tmpu_, to);
+    permute_state(to);
     permute(key_, tmpu_, to);
     send_.assign(ex_->send_slots());
     inv_.resize(n_);
