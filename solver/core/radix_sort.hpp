@@ -1,6 +1,7 @@
 // Host sort of (key, value) records by a 64-bit key: LSD radix, 8 bits a pass, on OpenMP
 // threads. For the host work of a layout rebuild (parallel/balance.cpp: items by curve key;
-// sph/sph_stage.hpp: particles by order key), where a comparison sort was serial.
+// sph/sph_stage.hpp: particles by order key; a rank's vertices by global id), where a
+// comparison sort was serial.
 //
 // Stable, so the result is the same for any thread count: each thread counts the digits of its
 // block, the counts are scanned in (digit, thread) order, and each thread scatters its block in
@@ -62,6 +63,30 @@ void radix_sort(std::vector<std::pair<std::uint64_t, V>>& a,
     }
     if (moves) a.swap(tmp);
   }
+}
+
+// The permutation that sorts `keys` (non-negative integers): keys[order[0]] <= keys[order[1]]
+// <= ..., equal keys in input order.
+template <class K>
+std::vector<std::int64_t> sorted_order(const std::vector<K>& keys) {
+  const auto n = static_cast<std::int64_t>(keys.size());
+  std::vector<std::pair<std::uint64_t, std::int64_t>> kv(n), tmp;
+  for_each(HostExec{}, n, [&](std::int64_t i) {
+    kv[i] = {static_cast<std::uint64_t>(keys[i]), i};
+  });
+  radix_sort(kv, tmp);
+  std::vector<std::int64_t> order(n);
+  for_each(HostExec{}, n, [&](std::int64_t i) { order[i] = kv[i].second; });
+  return order;
+}
+
+// in[order[i]] for every i, as type Out.
+template <class Out, class T>
+std::vector<Out> gathered(const std::vector<T>& in, const std::vector<std::int64_t>& order) {
+  std::vector<Out> out(order.size());
+  for_each(HostExec{}, static_cast<std::int64_t>(order.size()),
+           [&](std::int64_t i) { out[i] = static_cast<Out>(in[order[i]]); });
+  return out;
 }
 
 }  // namespace qdemsph

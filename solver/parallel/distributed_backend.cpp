@@ -11,7 +11,7 @@
 
 #include "core/error.hpp"
 #include "core/exec_host.hpp"
-#include "core/parallel_sort.hpp"
+#include "core/radix_sort.hpp"
 #include "core/select_host.hpp"
 #include "core/timers.hpp"
 #include "parallel/balance.hpp"

@@ -8,7 +8,7 @@
 
 #include "contact/contact_record.hpp"
 #include "core/exec_host.hpp"
-#include "core/parallel_sort.hpp"
+#include "core/radix_sort.hpp"
 #include "core/select_host.hpp"
 
 namespace qdemsph {
@@ -82,13 +82,16 @@ void FeatureIds::finish() {
   const auto n = static_cast<std::int64_t>(vertex.size());
   vertex_inv_.resize(n);
   for_each(HostExec{}, n, [&](std::int64_t i) { vertex_inv_[i] = {vertex[i], i}; });
-  parallel_sort(vertex_inv_.begin(), vertex_inv_.end());  // unique global ids
+  std::vector<std::pair<std::uint64_t, std::int64_t>> scratch;
+  radix_sort(vertex_inv_, scratch);  // unique global ids
 }
 
 std::int64_t FeatureIds::local_vertex(std::int64_t gid) const {
+  if (gid < 0) return -1;
+  const auto g = static_cast<std::uint64_t>(gid);
   const auto it = std::lower_bound(vertex_inv_.begin(), vertex_inv_.end(),
-                                   std::pair<std::int64_t, std::int64_t>{gid, -1});
-  return it != vertex_inv_.end() && it->first == gid ? it->second : -1;
+                                   std::pair<std::uint64_t, std::int64_t>{g, -1});
+  return it != vertex_inv_.end() && it->first == g ? it->second : -1;
 }
 
 // Vertex features are keyed by global id already (ContactTopology::vgid): only edges and

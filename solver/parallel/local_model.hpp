@@ -73,7 +73,7 @@ class FeatureIds {
   ContactShare to_local(ContactShare s) const;
 
  private:
-  std::vector<std::pair<std::int64_t, std::int64_t>> vertex_inv_;  // (global, local) sorted
+  std::vector<std::pair<std::uint64_t, std::int64_t>> vertex_inv_;  // (global, local) sorted
 };
 
 struct LocalModel {

@@ -1,5 +1,5 @@
 // Host orchestration primitives of a distributed rank's layout rebuild: stream compaction and
-// bucketing by key (core/select_host.hpp) and the sorting permutation (core/parallel_sort.hpp)
+// bucketing by key (core/select_host.hpp) and the sorting permutation (core/radix_sort.hpp)
 // give the serial answers, the same for any number of threads.
 #include <gtest/gtest.h>
 #include <omp.h>
@@ -9,7 +9,7 @@
 #include <numeric>
 #include <vector>
 
-#include "core/parallel_sort.hpp"
+#include "core/radix_sort.hpp"
 #include "core/select_host.hpp"
 
 namespace qdemsph {
