@@ -533,6 +533,25 @@ class SphStage final : public FluidStage {
     q.cost.clear();
     if (laid_out_) take_owned(cost_.cview(), q.cost);  // measured by the last compute()
     const std::int64_t nown = ex_->distribute(q);
+    // The neighbour grid: the window of the whole box's cells that holds this rank's particles,
+    // widened by the cells they can reach while the layout stands (skin / 2), so none leaves it
+    // (coordinates outside a window are clamped into its border cells). A periodic z keeps all
+    // its cells (they wrap: a rank at the seam holds ghosts from the other side).
+    const int margin = static_cast<int>(std::ceil(0.5 * ex_->skin() * grid_all_.inv_cell));
+    int lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = grid_all_.n[a] - 1;
+      for (const Vec3& p : q.x) {
+        const int c = grid_all_.coord(p[a], a);
+        lo[a] = std::min(lo[a], c), hi[a] = std::max(hi[a], c);
+      }
+      if (q.x.empty()) lo[a] = 0;  // no particle: one cell
+      lo[a] = std::max(lo[a] - margin, 0);
+      hi[a] = std::min(std::max(hi[a], lo[a]) + margin, grid_all_.n[a] - 1);
+      if (a == 2 && grid_all_.period_z > 0) lo[a] = 0, hi[a] = grid_all_.n[a] - 1;
+    }
+    grid_ = grid_all_.window(lo, hi);
+    start_.resize(kSphGroups * grid_.count() + 1);
     const std::int64_t n = static_cast<std::int64_t>(q.size());
     // The layout slots in the order of the keys: (key, slot) records sorted by radix (keys are
     // unique: each is its owner's place for the particle).
@@ -558,26 +577,8 @@ class SphStage final : public FluidStage {
     inv_.resize(n_);
     cost_.resize(n_);
     laid_out_ = true;
-    // The neighbour grid: the window of the whole box's cells that holds this rank's particles,
-    // widened by the cells they can reach while the layout stands (skin / 2), so none leaves it
-    // (coordinates outside a window are clamped into its border cells). A periodic z keeps all
-    // its cells (they wrap: a rank at the seam holds ghosts from the other side).
-    const int margin = static_cast<int>(std::ceil(0.5 * ex_->skin() * grid_all_.inv_cell));
-    int lo[3], hi[3] = {0, 0, 0};
-    for (int a = 0; a < 3; ++a) lo[a] = q.x.empty() ? 0 : grid_all_.n[a] - 1;  // none: one cell
-    for (const Vec3& p : q.x)
-      for (int a = 0; a < 3; ++a) {
-        const int c = grid_all_.coord(p[a], a);
-        lo[a] = std::min(lo[a], c), hi[a] = std::max(hi[a], c);
-      }
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::max(lo[a] - margin, 0);
-      hi[a] = std::min(std::max(hi[a], lo[a]) + margin, grid_all_.n[a] - 1);
-      if (a == 2 && grid_all_.period_z > 0) lo[a] = 0, hi[a] = grid_all_.n[a] - 1;
-    }
-    grid_ = grid_all_.window(lo, hi);
-    start_.resize(kSphGroups * grid_.count() + 1);
   }
+
   // Distributed: the owned particles' cost in the last compute() (0 before the first).
   double owned_cost() {
     const auto c = cost_.cview();
