@@ -369,10 +369,20 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     std::map<std::string, double> mine = local_stage_seconds();
     for (const auto& [k, v] : timers_.seconds())
       if (k.find('.') != std::string::npos) mine[k] = v;
-    static constexpr const char* keys[] = {
-        "contact.broad",   "contact.narrow",   "contact.force",   "halo.skin",
-        "halo.xv",         "halo.shares",      "elements.shares", "migration.export",
-        "migration.state", "migration.layout", "migration.upload"};
+    static constexpr const char* keys[] = {"contact.broad",
+                                           "contact.narrow",
+                                           "contact.force",
+                                           "halo.skin",
+                                           "halo.xv",
+                                           "halo.shares",
+                                           "elements.shares",
+                                           "migration.export",
+                                           "migration.state",
+                                           "migration.layout",
+                                           "migration.upload",
+                                           "migration.layout.model",
+                                           "migration.upload.model",
+                                           "migration.upload.halo"};
     constexpr int n = std::size(keys);
     double v[n], mx[n];
     for (int k = 0; k < n; ++k) {
@@ -1160,7 +1170,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       x.push_back(g.x[L.vertices[i]]);
       v.push_back(g.v[L.vertices[i]]);
     }
-    build_local_model(g, ix_, L, x, v, lm_);
+    {
+      auto s1 = timers_.scope("migration.layout.model");
+      build_local_model(g, ix_, L, x, v, lm_);
+    }
     part.reset();
     part.emplace(timers_, "migration.upload");
 
@@ -1171,7 +1184,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       overlap_acc_ = std::max(overlap_acc_, c["max_overlap_ever"]);
       rebuilds_acc_ += c["pair_rebuilds"];
     }
-    local_->upload(lm_.model);
+    {
+      auto s1 = timers_.scope("migration.upload.model");
+      local_->upload(lm_.model);
+    }
     local_->use_preload(preload_);
     BackendState st;
     st.x = lm_.model.x;
@@ -1234,7 +1250,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       }
     }
     local_->load_state(st);
-    halo_->engine().use_device(local_->space() == Space::Cuda, 6 * sizeof(double));
+    {
+      auto s1 = timers_.scope("migration.upload.halo");
+      halo_->engine().use_device(local_->space() == Space::Cuda, 6 * sizeof(double));
+    }
     local_->set_halo(halo_->engine().send_index(), L.n_owned, halo_->n_ghost());
     local_->mark_positions();
     L_ = std::move(L);

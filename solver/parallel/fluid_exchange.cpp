@@ -1,6 +1,10 @@
 #include "parallel/fluid_exchange.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
+#include <numeric>
+#include <optional>
 #include <utility>
 
 #include "core/exec_host.hpp"
@@ -51,13 +55,15 @@ class MpiFluidExchange final : public FluidExchange {
     if (!finalized) MPI_Comm_free(&comm_);
   }
 
-  std::int64_t distribute(FluidParticles& p) override {
+  std::int64_t distribute(FluidParticles& p, PhaseTimers& timers) override {
     if (!after_keep_) ++evaluations_;  // else keep() counted this evaluation
     rebuilt_ = after_keep_;
     after_keep_ = false;
     const double t0 = MPI_Wtime();
     ++rebuilds_;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
+    std::optional<PhaseTimers::Scope> part;
+    part.emplace(timers, "sph.rebuild.owners");
     // Each particle's curve key on the decomposition's grid (a new cut computes them anyway).
     if (dec_.splitters.empty() || rebalance_) {
       std::span<const double> cost = p.cost;
@@ -77,21 +83,31 @@ class MpiFluidExchange final : public FluidExchange {
     dest_.resize(n);
     for_each(HostExec{}, n,
              [&](std::int64_t i) { dest_[i] = owner_of_key(dec_.splitters, curve_key_[i]); });
+    part.emplace(timers, "sph.rebuild.migrate");
     migrate_->replan(dest_);
     resize(o_, migrate_->n_new());
     migrate_->move(fields_of(p), fields_of(o_));
     migrated_bytes_ += migrate_->engine().last_bytes();
     const std::int64_t nown = migrate_->n_new();
 
+    part.emplace(timers, "sph.rebuild.ghosts");
     find_ghost_ranks(nown);
+    part.emplace(timers, "sph.rebuild.halo");
     halo_.reset();
-    halo_ = std::make_unique<HaloPlan>(comm_, nown, g_.off, g_.ranks);  // ids go as a field
-    halo_->engine().use_device(space_ == Space::Cuda, 6 * sizeof(double));
+    {
+      auto t1 = timers.scope("sph.rebuild.halo.plan");
+      halo_ = std::make_unique<HaloPlan>(comm_, nown, g_.off, g_.ranks);  // ids go as a field
+    }
+    {
+      auto t1 = timers.scope("sph.rebuild.halo.device");
+      halo_->engine().use_device(space_ == Space::Cuda, 6 * sizeof(double));
+    }
     resize(o_, halo_->n_total());
     const auto f = fields_of(o_);
     halo_->gather_begin(f);
     halo_->gather_finish(f);
     halo_bytes_ += halo_->engine().last_bytes();
+    part.reset();
     o_.cost.clear();
     std::swap(p, o_);  // o_ keeps the caller's storage for the next distribute()
     // This part of the rebuild, until the stage's part is measured too (time_step).
@@ -153,6 +169,26 @@ class MpiFluidExchange final : public FluidExchange {
   }
 
  private:
+  // find_ghost_ranks()'s work arrays (g_), kept so that a rebuild reuses their storage.
+  struct GhostBlock {                     // find_ghost_ranks(): one block of particles'
+    KeyIndex cells;                       // distinct band cells
+    std::vector<std::uint64_t> cell_key;  // per cell: its key
+    std::vector<std::uint8_t> border;     // per cell: not interior
+    KeyIndex in_piece;                    // interior(): tree cells tested, and the answers
+    std::vector<std::uint8_t> in_piece_value;
+    std::vector<std::int64_t> cell_off;  // per cell: a range of cell_ranks
+    std::vector<int> cell_ranks;
+  };
+  struct GhostScratch {
+    std::vector<GhostBlock> block;                        // one per thread
+    std::vector<std::int64_t> cell_of;                    // per particle: its cell in its block
+    std::vector<std::pair<std::uint64_t, int>> occupied;  // other ranks' (cell, rank), sorted
+    KeyIndex occupied_cells;                              // its distinct cells
+    std::vector<std::int64_t> occupied_off;               // per distinct cell: its range
+    std::vector<std::int64_t> off;                        // per particle: a range of ranks
+    std::vector<int> ranks;
+  };
+
   std::uint64_t cell_key(Vec3 p) const {
     const BandCell c = band_.cell(p);
     return band_key(c.i[0], c.i[1], c.i[2]);
@@ -163,35 +199,48 @@ class MpiFluidExchange final : public FluidExchange {
   // to all, and a particle goes to every other rank with an owned particle in the 5^3 cells
   // around its own. A cell whose 5^3 cells lie inside this rank's piece (interior) has no
   // other rank's particle around it: only the others, near the piece's border, are published
-  // and looked up.
+  // and looked up. The particles are split into as many contiguous blocks as threads, each
+  // with its own table of the distinct cells of its particles (a cell at a block's edge is in
+  // two tables, and tested twice), so all but the publication runs in parallel.
   void find_ghost_ranks(std::int64_t nown) {
     GhostScratch& g = g_;
-    // Each particle's band cell (on all threads), then the distinct cells in the order of their
-    // first particle: one lookup for a run of particles in the same cell.
-    g.key_of.resize(nown);
-    for_each(HostExec{}, nown, [&](std::int64_t i) { g.key_of[i] = cell_key(o_.x[i]); });
-    g.cells.clear();
-    g.cell_key.clear();
+    const std::int64_t nb = nown >= kMinParallel ? omp_get_max_threads() : 1;
+    const auto lo = [&](std::int64_t b) { return nown * b / nb; };
+    if (static_cast<std::int64_t>(g.block.size()) < nb) g.block.resize(nb);
     g.cell_of.resize(nown);
-    for (std::int64_t i = 0; i < nown; ++i) {
-      const std::uint64_t k = g.key_of[i];
-      if (i > 0 && k == g.key_of[i - 1]) {
-        g.cell_of[i] = g.cell_of[i - 1];
-        continue;
+    // Each block's distinct cells, in the order of their first particle (one lookup for a run
+    // of particles in the same cell), and whether each is on the piece's border.
+#pragma omp parallel for schedule(static) if (nb > 1)
+    for (std::int64_t b = 0; b < nb; ++b) {
+      GhostBlock& w = g.block[b];
+      w.cells.clear();
+      w.cell_key.clear();
+      w.border.clear();
+      w.in_piece.clear();  // the decomposition may be new
+      w.in_piece_value.clear();
+      std::uint64_t last = 0;
+      for (std::int64_t i = lo(b); i < lo(b + 1); ++i) {
+        const std::uint64_t k = cell_key(o_.x[i]);
+        if (i > lo(b) && k == last) {
+          g.cell_of[i] = g.cell_of[i - 1];
+          continue;
+        }
+        last = k;
+        g.cell_of[i] = w.cells.insert(k);
+        if (g.cell_of[i] == static_cast<std::int64_t>(w.cell_key.size())) {
+          w.cell_key.push_back(k);
+          w.border.push_back(!interior(k, w));
+        }
       }
-      g.cell_of[i] = g.cells.insert(k);
-      if (g.cell_of[i] == static_cast<std::int64_t>(g.cell_key.size())) g.cell_key.push_back(k);
     }
-    const std::int64_t nc = g.cells.size();
-    g.border.resize(nc);
-    g.in_piece.clear();  // the decomposition may be new
-    g.in_piece_value.clear();
+    // The border cells published (each once); the other ranks' (cell, rank) sorted, and each
+    // distinct cell's range.
     std::vector<std::pair<std::uint64_t, std::int64_t>> pub;
-    for (std::int64_t c = 0; c < nc; ++c) {
-      g.border[c] = !interior(g.cell_key[c]);
-      if (g.border[c]) pub.push_back({g.cell_key[c], me_});
-    }
-    // The other ranks' published cells: (cell, rank) sorted, and each distinct cell's range.
+    for (std::int64_t b = 0; b < nb; ++b)
+      for (std::size_t c = 0; c < g.block[b].cell_key.size(); ++c)
+        if (g.block[b].border[c]) pub.push_back({g.block[b].cell_key[c], me_});
+    std::sort(pub.begin(), pub.end());
+    pub.erase(std::unique(pub.begin(), pub.end()), pub.end());
     g.occupied.clear();
     for (const auto& [c, r] : allgatherv(comm_, pub, &band_bytes_))
       if (r != me_) g.occupied.push_back({c, static_cast<int>(r)});
@@ -203,34 +252,43 @@ class MpiFluidExchange final : public FluidExchange {
           static_cast<std::int64_t>(g.occupied_off.size()))
         g.occupied_off.push_back(static_cast<std::int64_t>(k));
     g.occupied_off.push_back(static_cast<std::int64_t>(g.occupied.size()));
-    // Per cell, the other ranks within the band (sorted, once each).
-    g.cell_off.assign(1, 0);
-    g.cell_ranks.clear();
-    for (std::int64_t c = 0; c < nc; ++c) {
-      if (g.border[c]) {
-        const std::size_t first = g.cell_ranks.size();
-        band_.for_each_neighbour(band_cell_of_key(g.cell_key[c]), [&](std::uint64_t k) {
-          const std::int64_t d = g.occupied_cells.find(k);
-          if (d < 0) return;
-          for (std::int64_t q = g.occupied_off[d]; q < g.occupied_off[d + 1]; ++q)
-            g.cell_ranks.push_back(g.occupied[q].second);
-        });
-        std::sort(g.cell_ranks.begin() + first, g.cell_ranks.end());
-        g.cell_ranks.erase(std::unique(g.cell_ranks.begin() + first, g.cell_ranks.end()),
-                           g.cell_ranks.end());
-      }
-      g.cell_off.push_back(static_cast<std::int64_t>(g.cell_ranks.size()));
-    }
-    // Per particle, its cell's ranks.
+    // Per cell of each block, the other ranks within the band (sorted, once each); per
+    // particle, its cell's count.
     g.off.resize(nown + 1);
     g.off[0] = 0;
-    for (std::int64_t i = 0; i < nown; ++i)
-      g.off[i + 1] = g.off[i] + g.cell_off[g.cell_of[i] + 1] - g.cell_off[g.cell_of[i]];
+#pragma omp parallel for schedule(static) if (nb > 1)
+    for (std::int64_t b = 0; b < nb; ++b) {
+      GhostBlock& w = g.block[b];
+      w.cell_off.assign(1, 0);
+      w.cell_ranks.clear();
+      for (std::size_t c = 0; c < w.cell_key.size(); ++c) {
+        if (w.border[c]) {
+          const std::size_t first = w.cell_ranks.size();
+          band_.for_each_neighbour(band_cell_of_key(w.cell_key[c]), [&](std::uint64_t k) {
+            const std::int64_t d = g.occupied_cells.find(k);
+            if (d < 0) return;
+            for (std::int64_t q = g.occupied_off[d]; q < g.occupied_off[d + 1]; ++q)
+              w.cell_ranks.push_back(g.occupied[q].second);
+          });
+          std::sort(w.cell_ranks.begin() + first, w.cell_ranks.end());
+          w.cell_ranks.erase(std::unique(w.cell_ranks.begin() + first, w.cell_ranks.end()),
+                             w.cell_ranks.end());
+        }
+        w.cell_off.push_back(static_cast<std::int64_t>(w.cell_ranks.size()));
+      }
+      for (std::int64_t i = lo(b); i < lo(b + 1); ++i)
+        g.off[i + 1] = w.cell_off[g.cell_of[i] + 1] - w.cell_off[g.cell_of[i]];
+    }
+    std::partial_sum(g.off.begin(), g.off.end(), g.off.begin());
+    // Per particle, its cell's ranks.
     g.ranks.resize(g.off[nown]);
-    for_each(HostExec{}, nown, [&](std::int64_t i) {
-      std::copy(g.cell_ranks.begin() + g.cell_off[g.cell_of[i]],
-                g.cell_ranks.begin() + g.cell_off[g.cell_of[i] + 1], g.ranks.begin() + g.off[i]);
-    });
+#pragma omp parallel for schedule(static) if (nb > 1)
+    for (std::int64_t b = 0; b < nb; ++b) {
+      const GhostBlock& w = g.block[b];
+      for (std::int64_t i = lo(b); i < lo(b + 1); ++i)
+        std::copy(w.cell_ranks.begin() + w.cell_off[g.cell_of[i]],
+                  w.cell_ranks.begin() + w.cell_off[g.cell_of[i] + 1], g.ranks.begin() + g.off[i]);
+    }
   }
 
   // True when every point of the 5^3 band cells around cell `key` belongs to this rank: the
@@ -238,7 +296,7 @@ class MpiFluidExchange final : public FluidExchange {
   // (keys are hierarchical, sfc.hpp) lies in this rank's piece. Conservative: false may be
   // answered for an interior cell (it is then published needlessly), never true for another.
   // Periodic z: a box across the seam is not interior.
-  bool interior(std::uint64_t key) {
+  bool interior(std::uint64_t key, GhostBlock& memo) const {
     const SfcGrid& g = dec_.grid;
     const std::uint64_t first = dec_.splitters[me_], last = dec_.splitters[me_ + 1];
     if (first >= last) return false;
@@ -273,15 +331,15 @@ class MpiFluidExchange final : public FluidExchange {
       for (std::uint32_t y = lo[1] / s; y <= hi[1] / s; ++y)
         for (std::uint32_t z = lo[2] / s; z <= hi[2] / s; ++z) {
           // Neighbouring band cells test the same tree cells: each one's answer is kept
-          // (g_.in_piece; s < 2^16 and coordinates < 2^16 name it).
-          const std::int64_t m = g_.in_piece.insert(
+          // (memo.in_piece; s < 2^16 and coordinates < 2^16 name it).
+          const std::int64_t m = memo.in_piece.insert(
               std::uint64_t{s} << 48 | std::uint64_t{x} << 32 | std::uint64_t{y} << 16 | z);
-          if (m == static_cast<std::int64_t>(g_.in_piece_value.size())) {
+          if (m == static_cast<std::int64_t>(memo.in_piece_value.size())) {
             const std::uint64_t k = sfc_key(g.curve, x * s, y * s, z * s, g.order);
             const std::uint64_t seg = k - k % span;
-            g_.in_piece_value.push_back(seg >= first && seg + span <= last);
+            memo.in_piece_value.push_back(seg >= first && seg + span <= last);
           }
-          if (!g_.in_piece_value[m]) return false;
+          if (!memo.in_piece_value[m]) return false;
         }
     return true;
   }
@@ -358,20 +416,6 @@ class MpiFluidExchange final : public FluidExchange {
   std::unique_ptr<MigratePlan> migrate_;  // re-planned at each distribute(): buffers kept
   std::unique_ptr<HaloPlan> halo_;
   // distribute()'s work arrays, kept so that a rebuild reuses their storage.
-  struct GhostScratch {
-    KeyIndex cells;                       // the distinct band cells of the owned particles
-    std::vector<std::uint64_t> cell_key;  // per cell
-    std::vector<std::uint64_t> key_of;    // per particle: its cell's key
-    std::vector<std::int64_t> cell_of;    // per particle: its cell
-    std::vector<std::uint8_t> border;     // per cell: not interior
-    KeyIndex in_piece;                    // interior(): tree cells tested, and the answers
-    std::vector<std::uint8_t> in_piece_value;
-    std::vector<std::pair<std::uint64_t, int>> occupied;  // other ranks' (cell, rank), sorted
-    KeyIndex occupied_cells;                              // its distinct cells
-    std::vector<std::int64_t> occupied_off;               // per distinct cell: its range
-    std::vector<std::int64_t> cell_off, off;  // per cell / per particle: a range of ranks
-    std::vector<int> cell_ranks, ranks;
-  };
   std::vector<double> cost_;              // per particle: its cost before any is measured
   std::vector<std::uint64_t> curve_key_;  // per particle: its key on dec_.grid
   std::vector<int> dest_;                 // per particle: its new owner

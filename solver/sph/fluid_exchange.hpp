@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "core/memory.hpp"
+#include "core/timers.hpp"
 #include "core/vec.hpp"
 
 namespace qdemsph {
@@ -59,8 +60,9 @@ class FluidExchange {
   virtual ~FluidExchange() = default;
   // In: this rank's owned particles, with their costs when measured (a new partition weights
   // them). Out: the particles it owns now (migrated to the owner of their position), then the
-  // ghosts it needs (cost empty); returns the owned count. Collective.
-  virtual std::int64_t distribute(FluidParticles& p) = 0;
+  // ghosts it needs (cost empty); returns the owned count. Its parts are timed into `timers`
+  // (sph.rebuild.owners, .migrate, .ghosts, .halo). Collective.
+  virtual std::int64_t distribute(FluidParticles& p, PhaseTimers& timers) = 0;
   // At each step after the first distribute(): true when the layout still holds, given this
   // rank's largest displacement of an owned particle since distribute() and its owned
   // particles' cost in the last evaluation (0: not measured) (false: the largest displacement

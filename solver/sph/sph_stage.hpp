@@ -28,6 +28,7 @@
 #include <initializer_list>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <type_traits>
 #include <utility>
 
@@ -522,6 +523,8 @@ class SphStage final : public FluidStage {
   // this rank's particles), slot = its place in the exchange's layout.
   void redistribute() {
     FluidParticles& q = q_;  // its storage reused
+    std::optional<PhaseTimers::Scope> part;
+    part.emplace(timers_, "sph.rebuild.out");
     pick_owned();
     take_owned(x_.cview(), q.x);
     take_owned(v_.cview(), q.v);
@@ -532,7 +535,9 @@ class SphStage final : public FluidStage {
     take_owned(key_.cview(), q.key);
     q.cost.clear();
     if (laid_out_) take_owned(cost_.cview(), q.cost);  // measured by the last compute()
-    const std::int64_t nown = ex_->distribute(q);
+    part.reset();
+    const std::int64_t nown = ex_->distribute(q, timers_);
+    part.emplace(timers_, "sph.rebuild.in");
     // The neighbour grid: the window of the whole box's cells that holds this rank's particles,
     // widened by the cells they can reach while the layout stands (skin / 2), so none leaves it
     // (coordinates outside a window are clamped into its border cells). A periodic z keeps all

@@ -18,6 +18,7 @@
 //  - the exchange's traffic (summary.json `parallel`: fluid_halo_bytes_per_step,
 //    fluid_migrated_bytes) is what its plans send: ghosts x bytes per ghost x refreshes.
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <array>
@@ -26,6 +27,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "core/exec_host.hpp"
 #include "distributed_fixture.hpp"
 #include "integrate/stepper.hpp"
 #include "parallel/fluid_exchange.hpp"
@@ -302,7 +304,11 @@ TEST(DistributedFluid, TrafficIsWhatThePlansSend) {
   auto ex = make_fluid_exchange(options(50, 0.0), f);
   FluidParticles p = share_of(f);
   const std::vector<std::uint64_t> share(p.gid.begin(), p.gid.end());
-  const std::int64_t nown = ex->distribute(p);
+  PhaseTimers parts;
+  const std::int64_t nown = ex->distribute(p, parts);
+  for (const char* k :
+       {"sph.rebuild.owners", "sph.rebuild.migrate", "sph.rebuild.ghosts", "sph.rebuild.halo"})
+    EXPECT_TRUE(parts.seconds().contains(k)) << k;  // the rebuild's parts are timed
   std::int64_t count[2] = {static_cast<std::int64_t>(p.size()) - nown, 0};  // ghosts, arrived
   for (std::int64_t i = 0; i < nown; ++i)
     count[1] += std::find(share.begin(), share.end(), p.gid[i]) == share.end();
@@ -343,6 +349,30 @@ TEST(DistributedFluid, TrafficIsWhatThePlansSend) {
         static_cast<long>(t.halo_bytes), static_cast<long>(count[0]), static_cast<long>(kRecord),
         kRefreshes, static_cast<long>(kStep), static_cast<long>(t.migrated_bytes),
         static_cast<long>(t.band_bytes));
+}
+
+// The ghost search splits a rank's particles into a block per thread (each with its own
+// table of band cells): the layout (owned particles, then ghosts, in order) is the same for
+// any thread count. A finer dam (~50,000 particles) so that every rank's share is split.
+TEST(DistributedFluid, LayoutDoesNotDependOnTheThreadCount) {
+  Scene s = parse_scene(kDamScene, "dam.yaml");
+  s.fluid.spacing = 0.005;
+  const FluidSetup f = build_fluid(s.fluid, s.gravity);
+  ASSERT_GE(f.size() / size_of(), 2 * kMinParallel);
+  const int threads = omp_get_max_threads();
+  auto layout = [&](int nt) {
+    omp_set_num_threads(nt);
+    auto ex = make_fluid_exchange(options(50, 0.0), f);
+    FluidParticles p = share_of(f);
+    PhaseTimers parts;
+    const std::int64_t nown = ex->distribute(p, parts);
+    omp_set_num_threads(threads);
+    return std::pair{nown, p.gid};
+  };
+  const auto one = layout(1), four = layout(4);
+  EXPECT_EQ(one.first, four.first);
+  EXPECT_EQ(one.second, four.second);
+  if (size_of() > 1) EXPECT_GT(one.second.size(), static_cast<std::size_t>(one.first));
 }
 
 // The stage's traffic over a run: one evaluation per compute() (the constructor's and one
@@ -460,7 +490,8 @@ TEST(DistributedFluid, PartitionWeighsTheMeasuredCosts) {
     FluidParticles p = share_of(f);
     if (weighted)
       for (const Vec3& x : p.x) p.cost.push_back(cost_of(x));
-    const std::int64_t nown = ex->distribute(p);
+    PhaseTimers parts;
+    const std::int64_t nown = ex->distribute(p, parts);
     EXPECT_TRUE(p.cost.empty());  // costs do not travel
     double mine[2] = {0, static_cast<double>(nown)};
     for (std::int64_t i = 0; i < nown; ++i) mine[0] += cost_of(p.x[i]);
