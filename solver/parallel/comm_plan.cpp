@@ -4,6 +4,7 @@
 #include <climits>
 #include <cstdlib>
 #include <cstring>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -75,8 +76,7 @@ CommEngine::CommEngine(MPI_Comm comm, std::span<const std::int64_t> dest_offsets
 
 void CommEngine::replan(std::span<const std::int64_t> dest_offsets, std::span<const int> dest_ranks,
                         std::int64_t recv_base) {
-  if (in_flight_ || device_)
-    throw std::logic_error("comm plan: replan() in flight or on device buffers");
+  if (in_flight_) throw std::logic_error("comm plan: replan() in flight");
   recv_base_ = recv_base;
   n_items_ = static_cast<std::int64_t>(dest_offsets.size()) - 1;
   const std::int64_t n_items = n_items_;
@@ -104,6 +104,7 @@ void CommEngine::replan(std::span<const std::int64_t> dest_offsets, std::span<co
   nbrs_.clear();
   for (int r = 0; r < size_; ++r)
     if (r != rank_ && (count[r] > 0 || rcount[r] > 0)) nbrs_.push_back(r);
+  if (device_) remap_device();
 }
 
 CommEngine::~CommEngine() {
@@ -111,10 +112,7 @@ CommEngine::~CommEngine() {
   MPI_Finalized(&finalized);
   if (!finalized && comm_ != MPI_COMM_NULL) {
     if (in_flight_) MPI_Waitall(static_cast<int>(reqs_.size()), reqs_.data(), MPI_STATUSES_IGNORE);
-    if (device_) {
-      for (std::byte* p : peer_) cuda_ipc_close(p);
-      MPI_Barrier(comm_);  // no neighbour maps this rank's buffers when they are freed
-    }
+    if (device_) unmap_peers();  // no neighbour maps this rank's buffers when they are freed
     MPI_Comm_free(&comm_);
   }
 }
@@ -122,41 +120,60 @@ CommEngine::~CommEngine() {
 bool CommEngine::use_device(bool want, std::size_t max_stride) {
   if (device_) throw std::logic_error("comm plan: use_device() called twice");
   const char* env = std::getenv("QDEMSPH_DEVICE_HALO");
-  bool ok = want && !(env && std::strcmp(env, "0") == 0);
-  {  // every neighbour on this node
+  const bool ok = want && !(env && std::strcmp(env, "0") == 0);
+  {  // which ranks share this node
     MPI_Comm node;
     MPI_Comm_split_type(comm_, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &node);
     MPI_Group all, local;
     MPI_Comm_group(comm_, &all);
     MPI_Comm_group(node, &local);
-    for (int r : nbrs_) {
+    on_node_.assign(size_, 0);
+    for (int r = 0; r < size_; ++r) {
       int there = MPI_UNDEFINED;
       MPI_Group_translate_ranks(all, 1, &r, local, &there);
-      if (there == MPI_UNDEFINED) ok = false;
+      on_node_[r] = there != MPI_UNDEFINED;
     }
     MPI_Group_free(&all);
     MPI_Group_free(&local);
     MPI_Comm_free(&node);
   }
-  auto everyone = [&](bool mine) {
-    int m = mine ? 1 : 0, a = 0;
-    MPI_Allreduce(&m, &a, 1, MPI_INT, MPI_LAND, comm_);
-    return a != 0;
-  };
-  if (!everyone(ok)) return false;
-  // Each sender tells the neighbours it sends to where their records are: its buffer's IPC
-  // handle and the item their block starts at. A failure anywhere (a GPU pair without peer
-  // access) leaves every rank on host staging.
+  if (!all_ranks(ok && neighbours_on_node())) return false;
+  max_stride_ = max_stride;
+  peer_.assign(size_, nullptr);
+  peer_off_.assign(size_, 0);
+  if (!all_ranks(map_peers())) {
+    drop_device();
+    return false;
+  }
+  device_ = true;
+  return true;
+}
+
+bool CommEngine::all_ranks(bool mine) {
+  int m = mine ? 1 : 0, a = 0;
+  MPI_Allreduce(&m, &a, 1, MPI_INT, MPI_LAND, comm_);
+  return a != 0;
+}
+
+bool CommEngine::neighbours_on_node() const {
+  for (int r : nbrs_)
+    if (!on_node_[r]) return false;
+  return true;
+}
+
+// The device buffers sized for the lists, and each sender's buffer mapped where this rank's
+// records are (peer_, peer_off_): every sender tells the neighbours it sends to its buffer's
+// IPC handle and the item their block starts at; a receiver opens the handles of the senders
+// it has no mapping of. False on a failure here (a GPU pair without peer access).
+bool CommEngine::map_peers() {
   struct Where {
     CudaIpcHandle h;
     std::int64_t first;
   };
   std::vector<Where> out(size_), in(size_);
-  peer_.assign(size_, nullptr);
-  peer_off_.assign(size_, 0);
   try {
-    dsend_.resize(static_cast<std::int64_t>(std::max<std::size_t>(1, max_stride * n_send())));
-    drecv_.resize(static_cast<std::int64_t>(std::max<std::size_t>(1, max_stride * n_recv())));
+    dsend_.resize(static_cast<std::int64_t>(std::max<std::size_t>(1, max_stride_ * n_send())));
+    drecv_.resize(static_cast<std::int64_t>(std::max<std::size_t>(1, max_stride_ * n_recv())));
     const CudaIpcHandle h = cuda_ipc_handle(dsend_.view().p);
     std::vector<MPI_Request> req;
     for (int r : nbrs_) {
@@ -173,22 +190,36 @@ bool CommEngine::use_device(bool want, std::size_t max_stride) {
     MPI_Waitall(static_cast<int>(req.size()), req.data(), MPI_STATUSES_IGNORE);
     for (int r : nbrs_)
       if (recv_off_[r + 1] > recv_off_[r]) {
-        peer_[r] = static_cast<std::byte*>(cuda_ipc_open(in[r].h));
+        if (!peer_[r]) peer_[r] = static_cast<std::byte*>(cuda_ipc_open(in[r].h));
         peer_off_[r] = in[r].first;
       }
   } catch (const std::exception&) {
-    ok = false;
-  }
-  if (!everyone(ok)) {
-    for (std::byte*& p : peer_) cuda_ipc_close(p), p = nullptr;
-    MPI_Barrier(comm_);
-    dsend_ = Buffer<std::byte>(Space::Cuda);
-    drecv_ = Buffer<std::byte>(Space::Cuda);
     return false;
   }
-  device_ = true;
-  max_stride_ = max_stride;
   return true;
+}
+
+// Every mapping closed (after the barrier no rank maps this rank's buffers).
+void CommEngine::unmap_peers() {
+  for (std::byte*& p : peer_) cuda_ipc_close(p), p = nullptr;
+  MPI_Barrier(comm_);
+}
+
+void CommEngine::drop_device() {
+  unmap_peers();
+  dsend_ = Buffer<std::byte>(Space::Cuda);
+  drecv_ = Buffer<std::byte>(Space::Cuda);
+  device_ = false;
+}
+
+// replan() on device buffers: the senders' mappings stand unless some rank's send buffer must
+// grow (a new allocation: every rank drops its mappings first, so none outlives its buffer);
+// host staging again when a neighbour is off this node now.
+void CommEngine::remap_device() {
+  const bool grow = max_stride_ * n_send() > static_cast<std::size_t>(dsend_.capacity());
+  if (!all_ranks(neighbours_on_node())) return drop_device();
+  if (!all_ranks(!grow)) unmap_peers();
+  if (!all_ranks(map_peers())) drop_device();
 }
 
 void CommEngine::post_device() {
@@ -483,39 +514,69 @@ std::span<const std::int64_t> MigratePlan::offsets_for(std::span<const int> dest
 }
 
 HaloPlan::HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> offsets,
-                   std::span<const int> ranks)
-    : n_owned_(n_owned) {
-  if (static_cast<std::int64_t>(offsets.size()) != n_owned + 1)
-    throw std::invalid_argument("HaloPlan: offsets need n_owned + 1 entries");
-  int me = 0;
-  MPI_Comm_rank(comm, &me);
-  // Drop this rank and repeats from each item's list.
-  std::vector<std::int64_t> off(n_owned + 1, 0);
-  std::vector<int> dst;
-  dst.reserve(ranks.size());
-  for (std::int64_t i = 0; i < n_owned; ++i) {
-    const std::size_t first = dst.size();
-    for (std::int64_t k = offsets[i]; k < offsets[i + 1]; ++k)
-      if (ranks[k] != me) dst.push_back(ranks[k]);
-    std::sort(dst.begin() + first, dst.end());
-    dst.erase(std::unique(dst.begin() + first, dst.end()), dst.end());
-    off[i + 1] = static_cast<std::int64_t>(dst.size());
-  }
-  engine_ = std::make_unique<CommEngine>(comm, off, dst, n_owned);
+                   std::span<const int> ranks, std::span<const std::uint64_t> gid) {
+  MPI_Comm_rank(comm, &me_);
+  const std::span<const std::int64_t> off = lists(n_owned, offsets, ranks);
+  engine_ = std::make_unique<CommEngine>(comm, off, dst_, n_owned);
+  gather_ids(gid);
 }
 
-HaloPlan::HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> offsets,
-                   std::span<const int> ranks, std::span<const std::uint64_t> gid)
-    : HaloPlan(comm, n_owned, offsets, ranks) {
-  if (static_cast<std::int64_t>(gid.size()) < n_owned)
+void HaloPlan::replan(std::int64_t n_owned, std::span<const std::int64_t> offsets,
+                      std::span<const int> ranks, std::span<const std::uint64_t> gid) {
+  const std::span<const std::int64_t> off = lists(n_owned, offsets, ranks);
+  engine_->replan(off, dst_, n_owned);
+  gather_ids(gid);
+}
+
+// Each item's list without this rank and repeats (counted, then written, on the threads).
+std::span<const std::int64_t> HaloPlan::lists(std::int64_t n_owned,
+                                              std::span<const std::int64_t> offsets,
+                                              std::span<const int> ranks) {
+  if (static_cast<std::int64_t>(offsets.size()) != n_owned + 1)
+    throw std::invalid_argument("HaloPlan: offsets need n_owned + 1 entries");
+  n_owned_ = n_owned;
+  auto list = [&](std::int64_t i, int* r) {  // item i's ranks into r (at most its list's size)
+    std::int64_t n = 0;
+    for (std::int64_t k = offsets[i]; k < offsets[i + 1]; ++k)
+      if (ranks[k] != me_) r[n++] = ranks[k];
+    std::sort(r, r + n);
+    return static_cast<std::int64_t>(std::unique(r, r + n) - r);
+  };
+  off_.resize(n_owned + 1);
+  off_[0] = 0;
+  for_each(HostExec{}, n_owned, [&](std::int64_t i) {
+    const std::int64_t m = offsets[i + 1] - offsets[i];
+    if (m == 0) {
+      off_[i + 1] = 0;
+      return;
+    }
+    std::vector<int> r(m);  // allocates only for an item with copies
+    off_[i + 1] = list(i, r.data());
+  });
+  std::partial_sum(off_.begin(), off_.end(), off_.begin());
+  dst_.resize(off_[n_owned]);
+  for_each(HostExec{}, n_owned, [&](std::int64_t i) {
+    const std::int64_t m = offsets[i + 1] - offsets[i];
+    if (m == 0) return;
+    std::vector<int> r(m);
+    list(i, r.data());
+    std::copy(r.begin(), r.begin() + (off_[i + 1] - off_[i]), dst_.begin() + off_[i]);
+  });
+  return off_;
+}
+
+// Ghost ids (when given): a gather of the id field into a scratch array of n_total items.
+void HaloPlan::gather_ids(std::span<const std::uint64_t> gid) {
+  ghost_gids_.clear();
+  if (gid.empty()) return;
+  if (static_cast<std::int64_t>(gid.size()) < n_owned_)
     throw std::invalid_argument("HaloPlan: ids need n_owned entries");
-  // Ghost ids: a gather of the id field into a scratch array of n_total items.
   std::vector<std::uint64_t> ids(n_total(), 0);
-  std::copy(gid.begin(), gid.begin() + n_owned, ids.begin());
+  std::copy(gid.begin(), gid.begin() + n_owned_, ids.begin());
   const CommField f = comm_field(ids);
   gather_begin({&f, 1});
   gather_finish({&f, 1});
-  ghost_gids_.assign(ids.begin() + n_owned, ids.end());
+  ghost_gids_.assign(ids.begin() + n_owned_, ids.end());
 }
 
 }  // namespace qdemsph

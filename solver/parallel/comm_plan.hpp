@@ -94,9 +94,11 @@ class CommEngine {
   // dest_ranks[dest_offsets[i] .. dest_offsets[i + 1]). Collective over comm.
   CommEngine(MPI_Comm comm, std::span<const std::int64_t> dest_offsets,
              std::span<const int> dest_ranks, std::int64_t recv_base);
-  // New lists, as a new engine would have them, keeping the duplicated communicator and the
-  // host message buffers (a caller that plans again allocates them once). Collective; none in
-  // flight, no device buffers (use_device).
+  // New lists, as a new engine would have them, keeping the duplicated communicator, the host
+  // message buffers and, after use_device(), the device buffers and the mapped neighbours'
+  // buffers (a caller that plans again allocates and maps them once): a sender's buffer is
+  // mapped again only when some rank's must grow, or for a new neighbour; host staging again
+  // when a neighbour is off this node now. Collective; none in flight.
   void replan(std::span<const std::int64_t> dest_offsets, std::span<const int> dest_ranks,
               std::int64_t recv_base);
   ~CommEngine();
@@ -180,6 +182,13 @@ class CommEngine {
   std::vector<std::byte*> peer_;
   std::vector<std::int64_t> peer_off_;
   std::vector<MPI_Request> ready_;  // "packed" from the senders to this rank
+  std::vector<char> on_node_;       // per rank: on this node (use_device)
+  bool all_ranks(bool mine);        // mine on every rank (collective)
+  bool neighbours_on_node() const;
+  bool map_peers();
+  void unmap_peers();
+  void drop_device();
+  void remap_device();
   void post_device();
   std::span<const std::byte> finish_device();
   std::size_t stride_ = 0;
@@ -241,12 +250,14 @@ class MigratePlan {
 // repeats are ignored).
 class HaloPlan {
  public:
-  // gid: the owned items' ids, gathered so that ghost_gids() names the ghosts.
+  // gid: the owned items' ids, gathered so that ghost_gids() names the ghosts; without them
+  // (a caller that gathers ids as one of its fields) ghost_gids() is empty.
   HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> dest_offsets,
-           std::span<const int> dest_ranks, std::span<const std::uint64_t> gid);
-  // Without ids (a caller that gathers them as one of its fields): ghost_gids() empty.
-  HaloPlan(MPI_Comm comm, std::int64_t n_owned, std::span<const std::int64_t> dest_offsets,
-           std::span<const int> dest_ranks);
+           std::span<const int> dest_ranks, std::span<const std::uint64_t> gid = {});
+  // A plan for new lists on the same engine (CommEngine::replan: a caller that rebuilds its
+  // layout keeps the communicator, message buffers and device mappings). Collective.
+  void replan(std::int64_t n_owned, std::span<const std::int64_t> dest_offsets,
+              std::span<const int> dest_ranks, std::span<const std::uint64_t> gid = {});
   std::int64_t n_owned() const { return n_owned_; }
   std::int64_t n_ghost() const { return engine_->n_recv(); }
   std::int64_t n_total() const { return n_owned_ + n_ghost(); }
@@ -266,7 +277,13 @@ class HaloPlan {
   CommEngine& engine() { return *engine_; }  // packed exchanges (CommEngine::begin_packed)
 
  private:
+  std::span<const std::int64_t> lists(std::int64_t n_owned, std::span<const std::int64_t> offsets,
+                                      std::span<const int> ranks);
+  void gather_ids(std::span<const std::uint64_t> gid);
+  int me_ = 0;
   std::int64_t n_owned_ = 0;
+  std::vector<std::int64_t> off_;  // the engine's lists (kept for a replan)
+  std::vector<int> dst_;
   std::unique_ptr<CommEngine> engine_;
   std::vector<std::uint64_t> ghost_gids_;
 };

@@ -1133,8 +1133,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       std::copy(r.begin(), r.end(), ranks.begin() + off[i]);
     });
     const std::vector<std::uint64_t> gids(s.vertex.begin(), s.vertex.end());
-    halo_.reset();
-    halo_ = std::make_unique<HaloPlan>(comm_, L.n_owned, off, ranks, gids);
+    const bool first_halo = !halo_;  // later layouts plan again on its engine (buffers kept)
+    if (first_halo)
+      halo_ = std::make_unique<HaloPlan>(comm_, L.n_owned, off, ranks, gids);
+    else
+      halo_->replan(L.n_owned, off, ranks, gids);
     for (auto gv : halo_->ghost_gids()) L.vertices.push_back(static_cast<std::int64_t>(gv));
     L.n_free = static_cast<std::int64_t>(L.vertices.size());
     // Fixed bodies' contact vertices in the band, from the model.
@@ -1250,10 +1253,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       }
     }
     local_->load_state(st);
-    {
-      auto s1 = timers_.scope("migration.upload.halo");
-      halo_->engine().use_device(local_->space() == Space::Cuda, 6 * sizeof(double));
-    }
+    if (first_halo) halo_->engine().use_device(local_->space() == Space::Cuda, 6 * sizeof(double));
     local_->set_halo(halo_->engine().send_index(), L.n_owned, halo_->n_ghost());
     local_->mark_positions();
     L_ = std::move(L);

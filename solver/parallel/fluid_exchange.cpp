@@ -93,13 +93,10 @@ class MpiFluidExchange final : public FluidExchange {
     part.emplace(timers, "sph.rebuild.ghosts");
     find_ghost_ranks(nown);
     part.emplace(timers, "sph.rebuild.halo");
-    halo_.reset();
-    {
-      auto t1 = timers.scope("sph.rebuild.halo.plan");
-      halo_ = std::make_unique<HaloPlan>(comm_, nown, g_.off, g_.ranks);  // ids go as a field
-    }
-    {
-      auto t1 = timers.scope("sph.rebuild.halo.device");
+    if (halo_) {  // ids go as a field
+      halo_->replan(nown, g_.off, g_.ranks);
+    } else {
+      halo_ = std::make_unique<HaloPlan>(comm_, nown, g_.off, g_.ranks);
       halo_->engine().use_device(space_ == Space::Cuda, 6 * sizeof(double));
     }
     resize(o_, halo_->n_total());
@@ -414,7 +411,7 @@ class MpiFluidExchange final : public FluidExchange {
   std::int64_t halo_bytes_ = 0, migrated_bytes_ = 0, band_bytes_ = 0;
   Decomposition dec_;
   std::unique_ptr<MigratePlan> migrate_;  // re-planned at each distribute(): buffers kept
-  std::unique_ptr<HaloPlan> halo_;
+  std::unique_ptr<HaloPlan> halo_;        // planned again at each distribute(): buffers kept
   // distribute()'s work arrays, kept so that a rebuild reuses their storage.
   std::vector<double> cost_;              // per particle: its cost before any is measured
   std::vector<std::uint64_t> curve_key_;  // per particle: its key on dec_.grid

@@ -544,12 +544,12 @@ class SphStage final : public FluidStage {
     // its cells (they wrap: a rank at the seam holds ghosts from the other side).
     const int margin = static_cast<int>(std::ceil(0.5 * ex_->skin() * grid_all_.inv_cell));
     int lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = grid_all_.n[a] - 1;
-      for (const Vec3& p : q.x) {
-        const int c = grid_all_.coord(p[a], a);
-        lo[a] = std::min(lo[a], c), hi[a] = std::max(hi[a], c);
-      }
+    const std::int64_t nq = static_cast<std::int64_t>(q.size());
+    for (int a = 0; a < 3; ++a) {  // the extreme cells, on the threads (cells are exact doubles)
+      const auto cell = [&](std::int64_t i) { return double(grid_all_.coord(q.x[i][a], a)); };
+      lo[a] = static_cast<int>(-reduce_max(
+          HostExec{}, nq, [&](std::int64_t i) { return -cell(i); }, 1.0 - grid_all_.n[a]));
+      hi[a] = static_cast<int>(reduce_max(HostExec{}, nq, cell, 0.0));
       if (q.x.empty()) lo[a] = 0;  // no particle: one cell
       lo[a] = std::max(lo[a] - margin, 0);
       hi[a] = std::min(std::max(hi[a], lo[a]) + margin, grid_all_.n[a] - 1);

@@ -259,7 +259,41 @@ HaloSetup halo_setup() {
   return s;
 }
 
+// Other lists for the same items: the band's ranks and, for every third item, the next rank
+// too (more ghosts, so a replan's buffers must grow).
+std::pair<std::vector<std::int64_t>, std::vector<int>> wider_lists(const HaloSetup& s) {
+  const int me = rank_of(), np = size_of();
+  std::vector<std::int64_t> off{0};
+  std::vector<int> ranks;
+  for (std::int64_t i = 0; i < s.it.size(); ++i) {
+    ranks.insert(ranks.end(), s.ranks.begin() + s.off[i], s.ranks.begin() + s.off[i + 1]);
+    if (s.it.gid[i] % 3 == 0) ranks.push_back((me + 1) % np);
+    off.push_back(static_cast<std::int64_t>(ranks.size()));
+  }
+  return {off, ranks};
+}
+
 }  // namespace
+
+// A plan made again on its engine (a layout rebuild) equals a new plan of the same lists.
+TEST(HaloPlan, ReplanEqualsANewPlan) {
+  HaloSetup s = halo_setup();
+  const auto [off, ranks] = wider_lists(s);
+  for (int round = 0; round < 2; ++round) {  // wider lists, then the first again
+    const auto& o = round == 0 ? off : s.off;
+    const auto& r = round == 0 ? ranks : s.ranks;
+    s.plan->replan(s.it.size(), o, r, s.it.gid);
+    const HaloPlan fresh(MPI_COMM_WORLD, s.it.size(), o, r, s.it.gid);
+    EXPECT_EQ(s.plan->n_ghost(), fresh.n_ghost());
+    EXPECT_EQ(s.plan->ghost_gids(), fresh.ghost_gids());
+    EXPECT_EQ(s.plan->engine().send_index(), fresh.engine().send_index());
+    EXPECT_EQ(s.plan->engine().neighbours(), fresh.engine().neighbours());
+  }
+  if (size_of() > 1) {
+    const HaloPlan wide(MPI_COMM_WORLD, s.it.size(), off, ranks, s.it.gid);
+    EXPECT_GT(wide.n_ghost(), s.plan->n_ghost());
+  }
+}
 
 TEST(HaloPlan, GhostsAreTheBandAndEqualOwnerValues) {
   HaloSetup s = halo_setup();
@@ -423,6 +457,32 @@ TEST(HaloPlan, DeviceResidentPackedExchangeEqualsHostStaged) {
   }
   EXPECT_EQ(bad, 0) << "rank " << me;
   EXPECT_THROW(e.packed_send_buffer(3 * stride), std::logic_error);  // larger than max_stride
+  // Planned again (wider lists: the send buffers grow and are mapped again; then the first
+  // lists: the mappings stand), the device exchange still equals a host-staged one.
+  const auto [off, ranks] = wider_lists(s);
+  for (int round = 0; round < 2; ++round) {
+    const auto& o = round == 0 ? off : s.off;
+    const auto& rk = round == 0 ? ranks : s.ranks;
+    s.plan->replan(s.it.size(), o, rk);
+    HaloPlan host(MPI_COMM_WORLD, s.it.size(), o, rk);
+    ASSERT_EQ(e.packed_space(), Space::Cuda);
+    ASSERT_EQ(e.send_index(), host.engine().send_index());
+    std::vector<double> r(2 * e.n_send());
+    for (std::int64_t k = 0; k < e.n_send(); ++k)
+      r[2 * k] = payload(s.it.gid[e.send_index()[k]]), r[2 * k + 1] = k + round;
+    auto hb = host.engine().packed_send_buffer(stride);
+    std::memcpy(hb.data(), r.data(), hb.size());
+    host.engine().begin_packed();
+    const auto want = host.engine().finish_packed();
+    auto buf = e.packed_send_buffer(stride);
+    space_copy(buf.data(), Space::Cuda, r.data(), Space::Host, buf.size());
+    e.begin_packed();
+    const auto in = e.finish_packed();
+    ASSERT_EQ(in.size(), want.size());
+    std::vector<std::byte> got(in.size());
+    space_copy(got.data(), Space::Host, in.data(), Space::Cuda, in.size());
+    EXPECT_EQ(std::memcmp(got.data(), want.data(), got.size()), 0) << "rank " << me;
+  }
 }
 
 namespace {
