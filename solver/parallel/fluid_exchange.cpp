@@ -24,10 +24,16 @@ std::vector<CommField> fields_of(FluidParticles& p) {
           comm_field(p.type), comm_field(p.gid), comm_field(p.key)};
 }
 
+// The fields at n items. Storage grows by 1/8 more than asked: the owned items come first and
+// the ghosts are appended, and a reallocation for them would copy the arrays and fault in
+// fresh pages.
 void resize(FluidParticles& p, std::int64_t n) {
   const auto k = static_cast<std::size_t>(n);
-  p.x.resize(k), p.v.resize(k), p.rho.resize(k), p.m.resize(k);
-  p.type.resize(k), p.gid.resize(k), p.key.resize(k);
+  auto fit = [&](auto& v) {
+    if (v.capacity() < k) v.reserve(k + k / 8);
+    v.resize(k);
+  };
+  fit(p.x), fit(p.v), fit(p.rho), fit(p.m), fit(p.type), fit(p.gid), fit(p.key);
 }
 
 class MpiFluidExchange final : public FluidExchange {
