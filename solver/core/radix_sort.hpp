@@ -28,7 +28,7 @@ template <class V>
 void radix_sort(std::vector<std::pair<std::uint64_t, V>>& a,
                 std::vector<std::pair<std::uint64_t, V>>& tmp, int bits = 64) {
   const std::int64_t n = static_cast<std::int64_t>(a.size());
-  tmp.resize(a.size());
+  resize_for_overwrite(tmp, a.size());
   int most = 1;
 #ifdef _OPENMP
   if (n >= kMinParallel) most = omp_get_max_threads();

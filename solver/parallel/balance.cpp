@@ -32,7 +32,7 @@ void allreduce_sum_same(MPI_Comm comm, double* v, int n) {
 }
 
 void grid_keys(const SfcGrid& grid, std::span<const Vec3> pos, std::vector<std::uint64_t>& keys) {
-  keys.resize(pos.size());
+  resize_for_overwrite(keys, pos.size());
   for_each(HostExec{}, static_cast<std::int64_t>(pos.size()),
            [&](std::int64_t i) { keys[i] = grid.key(pos[i]); });
 }

@@ -24,16 +24,19 @@ std::vector<CommField> fields_of(FluidParticles& p) {
           comm_field(p.type), comm_field(p.gid), comm_field(p.key)};
 }
 
-// The fields at n items. Storage grows by 1/8 more than asked: the owned items come first and
-// the ghosts are appended, and a reallocation for them would copy the arrays and fault in
-// fresh pages.
+// The fields at n items, contents not kept (resize_for_overwrite): room for 1/8 more, so that
+// appending the ghosts to the owned items does not reallocate.
+void resize_for_overwrite(FluidParticles& p, std::int64_t n) {
+  const auto k = static_cast<std::size_t>(n);
+  auto each = [&](auto&... v) { (qdemsph::resize_for_overwrite(v, k), ...); };
+  each(p.x, p.v, p.rho, p.m, p.type, p.gid, p.key);
+}
+
+// The fields at n items, the first ones kept.
 void resize(FluidParticles& p, std::int64_t n) {
   const auto k = static_cast<std::size_t>(n);
-  auto fit = [&](auto& v) {
-    if (v.capacity() < k) v.reserve(k + k / 8);
-    v.resize(k);
-  };
-  fit(p.x), fit(p.v), fit(p.rho), fit(p.m), fit(p.type), fit(p.gid), fit(p.key);
+  p.x.resize(k), p.v.resize(k), p.rho.resize(k), p.m.resize(k);
+  p.type.resize(k), p.gid.resize(k), p.key.resize(k);
 }
 
 class MpiFluidExchange final : public FluidExchange {
@@ -74,7 +77,7 @@ class MpiFluidExchange final : public FluidExchange {
     if (dec_.splitters.empty() || rebalance_) {
       std::span<const double> cost = p.cost;
       if (p.cost.size() != p.size()) {  // not measured yet
-        cost_.resize(n);
+        qdemsph::resize_for_overwrite(cost_, n);
         for_each(HostExec{}, n,
                  [&](std::int64_t i) { cost_[i] = p.type[i] == kSphFluid ? 1.0 : kFluidWallCost; });
         cost = cost_;
@@ -86,12 +89,12 @@ class MpiFluidExchange final : public FluidExchange {
     rebalance_ = false;
 
     // Owned particles to the owners of their positions, into o_ (its storage reused).
-    dest_.resize(n);
+    qdemsph::resize_for_overwrite(dest_, n);
     for_each(HostExec{}, n,
              [&](std::int64_t i) { dest_[i] = owner_of_key(dec_.splitters, curve_key_[i]); });
     part.emplace(timers, "sph.rebuild.migrate");
     migrate_->replan(dest_);
-    resize(o_, migrate_->n_new());
+    resize_for_overwrite(o_, migrate_->n_new());
     migrate_->move(fields_of(p), fields_of(o_));
     migrated_bytes_ += migrate_->engine().last_bytes();
     const std::int64_t nown = migrate_->n_new();
@@ -210,7 +213,7 @@ class MpiFluidExchange final : public FluidExchange {
     const std::int64_t nb = nown >= kMinParallel ? omp_get_max_threads() : 1;
     const auto lo = [&](std::int64_t b) { return nown * b / nb; };
     if (static_cast<std::int64_t>(g.block.size()) < nb) g.block.resize(nb);
-    g.cell_of.resize(nown);
+    qdemsph::resize_for_overwrite(g.cell_of, nown);
     // Each block's distinct cells, in the order of their first particle (one lookup for a run
     // of particles in the same cell), and whether each is on the piece's border.
 #pragma omp parallel for schedule(static) if (nb > 1)
@@ -257,7 +260,7 @@ class MpiFluidExchange final : public FluidExchange {
     g.occupied_off.push_back(static_cast<std::int64_t>(g.occupied.size()));
     // Per cell of each block, the other ranks within the band (sorted, once each); per
     // particle, its cell's count.
-    g.off.resize(nown + 1);
+    qdemsph::resize_for_overwrite(g.off, nown + 1);
     g.off[0] = 0;
 #pragma omp parallel for schedule(static) if (nb > 1)
     for (std::int64_t b = 0; b < nb; ++b) {
@@ -284,7 +287,7 @@ class MpiFluidExchange final : public FluidExchange {
     }
     std::partial_sum(g.off.begin(), g.off.end(), g.off.begin());
     // Per particle, its cell's ranks.
-    g.ranks.resize(g.off[nown]);
+    qdemsph::resize_for_overwrite(g.ranks, g.off[nown]);
 #pragma omp parallel for schedule(static) if (nb > 1)
     for (std::int64_t b = 0; b < nb; ++b) {
       const GhostBlock& w = g.block[b];

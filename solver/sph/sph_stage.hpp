@@ -560,11 +560,11 @@ class SphStage final : public FluidStage {
     const std::int64_t n = static_cast<std::int64_t>(q.size());
     // The layout slots in the order of the keys: (key, slot) records sorted by radix (keys are
     // unique: each is its owner's place for the particle).
-    by_key_.resize(n);
+    resize_for_overwrite(by_key_, n);
     for_each(HostExec{}, n, [&](std::int64_t k) { by_key_[k] = {q.key[k], k}; });
     const std::uint64_t top = q.key.empty() ? 0 : *std::max_element(q.key.begin(), q.key.end());
     radix_sort(by_key_, by_key_scratch_, std::bit_width(top));
-    ord_.resize(n);
+    resize_for_overwrite(ord_, n);
     for_each(HostExec{}, n, [&](std::int64_t k) { ord_[k] = by_key_[k].second; });
     // The layout, then each particle i in the order of the keys from layout slot ord[i].
     set_owned(q.x, q.v, q.rho, q.m, q.type, q.gid, q.key);
@@ -695,14 +695,14 @@ class SphStage final : public FluidStage {
   template <class T>
   void take_owned(View<const T> v, std::vector<T>& out) {
     const T* h = host_readable(v.p, v.n, 0);
-    out.resize(pick_.size());
+    resize_for_overwrite(out, pick_.size());
     for_each(HostExec{}, static_cast<std::int64_t>(pick_.size()),
              [&](std::int64_t k) { out[k] = h[pick_[k]]; });
   }
   void take_owned(Vec3CView v, std::vector<Vec3>& out) {
     const double* h[3] = {host_readable(v.x, v.n, 0), host_readable(v.y, v.n, 1),
                           host_readable(v.z, v.n, 2)};
-    out.resize(pick_.size());
+    resize_for_overwrite(out, pick_.size());
     for_each(HostExec{}, static_cast<std::int64_t>(pick_.size()), [&](std::int64_t k) {
       const std::int64_t i = pick_[k];
       out[k] = {h[0][i], h[1][i], h[2][i]};

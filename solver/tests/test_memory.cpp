@@ -73,6 +73,30 @@ Copied copy_in(Space s) {
   return {g.to_host(), d.to_host(), bd.to_host()};
 }
 
+// Host work arrays and staging bytes grow as Buffers do: within the capacity the allocation
+// stands; outgrowing it they take 1/8 more room (a vector copies nothing then).
+TEST(Memory, HostWorkArraysGrowWithRoom) {
+  std::vector<double> v(10, 1.0);
+  resize_for_overwrite(v, 800);
+  EXPECT_EQ(v.size(), 800u);
+  EXPECT_EQ(v.capacity(), 900u);
+  const double* p = v.data();
+  resize_for_overwrite(v, 900);
+  resize_for_overwrite(v, 5);
+  EXPECT_EQ(v.data(), p);
+  EXPECT_EQ(v.size(), 5u);
+  StagingBytes b;
+  b.resize(800);
+  const std::byte* q = b.data();
+  b.resize(800);
+  EXPECT_EQ(b.data(), q);
+  b.resize(1600);
+  const std::byte* r = b.data();
+  b.resize(1800);  // within the 1/8 room of the second allocation
+  EXPECT_EQ(b.data(), r);
+  EXPECT_EQ(b.size(), 1800u);
+}
+
 TEST(Memory, GatherAndScatterByIndex) {
   const Copied c = copy_in(Space::Host);
   EXPECT_EQ(c.gathered, (std::vector<double>{15, 10, 13}));
