@@ -307,13 +307,14 @@ void CommEngine::pack(std::span<const CommField> src, Dir dir, bool self) {
   // Forward sends along send_off_ and receives along recv_off_; reverse swaps them.
   const std::vector<std::int64_t>& so = fwd ? send_off_ : recv_off_;
   check_fields(src, fwd ? n_items_ : recv_base_ + n_recv(), "source");
-  sendbuf_.resize(stride_ * so[size_]);
+  sendbuf_.resize(stride_ * buffer_slot(so[size_], so, self));
   // Pack, item-major. Bytes: stride per slot each way.
   std::size_t off = 0;
   for (const CommField& f : src) {
     for_slots(so[size_], so[rank_], so[rank_ + 1], self, [&](std::int64_t b, std::int64_t e) {
       copy_each(
-          b, e, f.elem, [&](std::int64_t k) { return &sendbuf_[k * stride_ + off]; },
+          b, e, f.elem,
+          [&](std::int64_t k) { return &sendbuf_[buffer_slot(k, so, self) * stride_ + off]; },
           [&](std::int64_t k) {
             return f.data + (fwd ? send_index_[k] : recv_base_ + k) * f.elem;
           });
@@ -323,12 +324,17 @@ void CommEngine::pack(std::span<const CommField> src, Dir dir, bool self) {
   seconds_.pack += MPI_Wtime() - t0;
 }
 
+std::int64_t CommEngine::buffer_slot(std::int64_t k, const std::vector<std::int64_t>& off,
+                                     bool self) const {
+  return self || k <= off[rank_] ? k : k - (off[rank_ + 1] - off[rank_]);
+}
+
 void CommEngine::post(Dir dir, bool self) {
   const double t0 = MPI_Wtime();
   const bool fwd = dir == Dir::Forward;
   const std::vector<std::int64_t>& so = fwd ? send_off_ : recv_off_;
   const std::vector<std::int64_t>& ro = fwd ? recv_off_ : send_off_;
-  recvbuf_.resize(stride_ * ro[size_]);
+  recvbuf_.resize(stride_ * buffer_slot(ro[size_], ro, self));
   // Post receives first, then sends; the self part is a copy (unless forward() copies it).
   reqs_.clear();
   last_bytes_ = 0;
@@ -336,15 +342,15 @@ void CommEngine::post(Dir dir, bool self) {
     const std::int64_t n = ro[r + 1] - ro[r];
     if (n == 0) continue;
     reqs_.emplace_back();
-    MPI_Irecv(recvbuf_.data() + ro[r] * stride_, as_count(n * stride_), MPI_BYTE, r, kTag, comm_,
-              &reqs_.back());
+    MPI_Irecv(recvbuf_.data() + buffer_slot(ro[r], ro, self) * stride_, as_count(n * stride_),
+              MPI_BYTE, r, kTag, comm_, &reqs_.back());
   }
   for (int r : nbrs_) {
     const std::int64_t n = so[r + 1] - so[r];
     if (n == 0) continue;
     reqs_.emplace_back();
-    MPI_Isend(sendbuf_.data() + so[r] * stride_, as_count(n * stride_), MPI_BYTE, r, kTag, comm_,
-              &reqs_.back());
+    MPI_Isend(sendbuf_.data() + buffer_slot(so[r], so, self) * stride_, as_count(n * stride_),
+              MPI_BYTE, r, kTag, comm_, &reqs_.back());
     last_bytes_ += n * stride_;
   }
   const std::int64_t nself = so[rank_ + 1] - so[rank_];
@@ -412,7 +418,9 @@ void CommEngine::unpack(std::span<const CommField> dst, Dir dir, bool self) {
                   copy_each(
                       b, e, f.elem,
                       [&](std::int64_t k) { return f.data + (recv_base_ + k) * f.elem; },
-                      [&](std::int64_t k) { return &recvbuf_[k * stride_ + off]; });
+                      [&](std::int64_t k) {
+                        return &recvbuf_[buffer_slot(k, recv_off_, self) * stride_ + off];
+                      });
                 });
       off += f.elem;
     }
@@ -493,8 +501,7 @@ MigratePlan::MigratePlan(MPI_Comm comm, std::span<const int> dest,
   new_gids_.resize(engine_->n_recv());
   const CommField s = comm_field(const_cast<std::uint64_t*>(gid.data()), n_old_);
   const CommField d = comm_field(new_gids_);
-  begin({&s, 1});
-  finish({&d, 1});
+  move({&s, 1}, {&d, 1});
 }
 
 MigratePlan::MigratePlan(MPI_Comm comm, std::span<const int> dest)

@@ -193,7 +193,11 @@ class CommEngine {
   std::span<const std::byte> finish_device();
   std::size_t stride_ = 0;
   // begin() and finish() without this rank's own slots when not `self` (forward()): packs
-  // src, posts receives and sends of the packed sendbuf_, waits and unpacks into dst.
+  // src, posts receives and sends of the packed sendbuf_, waits and unpacks into dst. The
+  // message buffers then leave those slots out: slot k of a buffer laid out along `off` (send
+  // or receive offsets per rank) is record buffer_slot(k, off, self) (a migration keeps most
+  // items, and a buffer of them all would be as large as the arrays).
+  std::int64_t buffer_slot(std::int64_t k, const std::vector<std::int64_t>& off, bool self) const;
   void pack(std::span<const CommField> src, Dir dir, bool self);
   void post(Dir dir, bool self);
   void unpack(std::span<const CommField> dst, Dir dir, bool self);

@@ -955,8 +955,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     optional_field(any_f, s.f, f);
     optional_field(any_relax, s.x0, x0);
     optional_field(any_relax, s.f0, f0);
-    mv.begin(src);
-    mv.finish(dst);
+    mv.move(src, dst);
     bytes += mv.engine().last_bytes();
 
     // Tets: from their holder to every new owner of one of their vertices (each tet's ranks
@@ -985,8 +984,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     std::vector<double> td(te.n_recv());
     {
       const CommField a[2] = {cfield(s.tet), cfield(s.diss_t)}, b[2] = {cfield(tg), cfield(td)};
-      te.begin(a, CommEngine::Dir::Forward);
-      te.finish(b, CommEngine::Dir::Forward);
+      te.forward(a, b);
       bytes += te.last_bytes();
     }
 
@@ -1014,8 +1012,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
                                cfield(hist.xi),       cfield(hist.h),  cfield(hist.energy),
                                cfield(hist.energy_t), cfield(hist.v),  cfield(hist.w),
                                cfield(hist.n1)};
-      he.begin(a, CommEngine::Dir::Forward);
-      he.finish(b, CommEngine::Dir::Forward);
+      he.forward(a, b);
       bytes += he.last_bytes();
     }
     migrated_bytes_ += bytes;
