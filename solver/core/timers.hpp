@@ -52,6 +52,10 @@ class PhaseTimers {
   Scope launch(const char* name) { return Scope(*this, name, false); }
   const std::map<std::string, double>& seconds() const { return seconds_; }
   void clear() { seconds_.clear(); }
+  // Drops every timer but `name` (set-up work reported apart from the steps').
+  void clear_except(const std::string& name) {
+    std::erase_if(seconds_, [&](const auto& e) { return e.first != name; });
+  }
 
  private:
   std::function<void()> sync_;

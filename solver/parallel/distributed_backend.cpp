@@ -555,15 +555,15 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     const auto sec = seconds_of;
     const double contact = local_contact_seconds();
     // The fluid's ghost refreshes and layout rebuilds count as halo and migration, like the
-    // bodies', and its first layout as set-up (sph_stage.hpp: sub-phases sph.halo,
-    // sph.rebuild, sph.setup of the run's "sph"). Balance and migration are those of the
-    // stepping loop: the first distribution is set-up (adopt).
+    // bodies' (sph_stage.hpp: sub-phases sph.halo and sph.rebuild of the run's "sph"), and its
+    // first layout, built before the steps (sph.setup), as set-up. Balance and migration are
+    // those of the stepping loop: the first distribution is set-up (adopt).
     const double fh = sec(run_phases, "sph.halo"), fr = sec(run_phases, "sph.rebuild"),
                  fs = sec(run_phases, "sph.setup");
     double p[8] = {sec(t, "elements") - contact,
                    sec(t, "integration"),
                    contact,
-                   sec(run_phases, "sph") - fh - fr - fs,
+                   sec(run_phases, "sph") - fh - fr,
                    sec(t, "halo") + fh,
                    sec(t, "migration") - setup_migration_s_ + fr,
                    sec(t, "balance") - setup_balance_s_,

@@ -67,8 +67,9 @@ class FluidStage {
   // particle count differs).
   virtual FluidState save_state() = 0;
   virtual void load_state(const FluidState& state) = 0;
-  // Seconds of the sub-phases inside compute() (distributed: "sph.halo", "sph.rebuild";
-  // one rank: none), for summary.json and the parallel record.
+  // Seconds of the sub-phases inside compute() (distributed: "sph.halo", "sph.rebuild", and
+  // "sph.setup", the first layout, built before the steps; one rank: none), for summary.json
+  // and the parallel record.
   virtual std::map<std::string, double> stage_seconds() const = 0;
   virtual std::int64_t size() const = 0;
   virtual std::int64_t n_fluid() const = 0;

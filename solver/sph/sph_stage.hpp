@@ -128,8 +128,10 @@ class SphStage final : public FluidStage {
       coupling_ = std::make_unique<SolidCoupling<Exec>>(f.markers, f.n_fluid + f.n_wall, *solid);
     }
     if (!ex_) sort();  // groups contiguous before the first compute places the markers
+    setting_up_ = true;
     compute();
-    timers_.clear();  // the first layout is set-up, not a step's upkeep
+    setting_up_ = false;
+    timers_.clear_except("sph.setup");  // the first layout is set-up, not a step's upkeep
   }
 
   void kick(double h) override {
@@ -174,7 +176,7 @@ class SphStage final : public FluidStage {
       if (keep) {
         refresh_positions();
       } else {
-        auto s = timers_.scope(laid_out_ ? "sph.rebuild" : "sph.setup");
+        auto s = timers_.scope(setting_up_ ? "sph.setup" : "sph.rebuild");
         redistribute();
       }
     }
@@ -754,9 +756,10 @@ class SphStage final : public FluidStage {
   std::int64_t n_ = 0, nf_ = 0;                // this rank's, ghosts included
   std::int64_t nml_ = 0;                       // this rank's markers, ghosts included
   std::int64_t n_own_ = 0;                     // this rank's owned particles
-  bool laid_out_ = false;   // distributed: the exchange's layout is this rank's particles
-  double pending_dt_ = 0;   // time drifted since the last compute(): the density update's dt
-  double wall_volume_ = 0;  // dx^3
+  bool laid_out_ = false;    // distributed: the exchange's layout is this rank's particles
+  bool setting_up_ = false;  // in the constructor's compute()
+  double pending_dt_ = 0;    // time drifted since the last compute(): the density update's dt
+  double wall_volume_ = 0;   // dx^3
   Vec3Buffer x_{S}, v_{S}, a_{S}, tmp3_{S};
   Buffer<double> rho_{S}, p_{S}, drho_{S}, m_{S}, tmpd_{S};
   Vec3Buffer x0_{S};      // distributed: owned positions at the last redistribute(), by slot
@@ -776,14 +779,14 @@ class SphStage final : public FluidStage {
   std::vector<std::int64_t> pick_;  // the owned particles' indices (pick_owned())
   std::vector<std::int64_t> ord_;   // the layout slots in the order of the keys
   std::vector<std::pair<std::uint64_t, std::int64_t>> by_key_, by_key_scratch_;
-  std::vector<std::byte> staging_;                 // a GPU stage's arrays copied out
+  StagingBytes staging_;                           // a GPU stage's arrays copied out
   std::unique_ptr<SolidCoupling<Exec>> coupling_;  // null without bodies
   std::unique_ptr<FluidExchange> ex_;              // null on one rank
   // Distributed: the layout's upkeep inside compute(), device work included: "sph.halo" (the
   // skin test and the ghost refreshes; of it "sph.halo.skin" the test, "sph.halo.mpi" the
   // messages of the refreshes, without packing and copies), "sph.rebuild" (redistribute():
-  // migration and the new ghost layout), "sph.setup" (the first layout, and the one after a
-  // load_state); each scope starts after a synchronisation, so the
+  // migration and the new ghost layout, after a load_state too), "sph.setup" (the first
+  // layout, in the constructor: not a step's); each scope starts after a synchronisation, so the
   // passes' device work is not counted in it. One rank times nothing here (no
   // synchronisation added).
   PhaseTimers timers_{[] { exec_sync(Exec{}); }};

@@ -351,6 +351,21 @@ TEST(DistributedFluid, TrafficIsWhatThePlansSend) {
         static_cast<long>(t.band_bytes));
 }
 
+// The first layout, built in the stage's constructor, is set-up (sph.setup, reported in the
+// parallel record's setup_s), not a step's upkeep; the steps' upkeep is sph.halo / sph.rebuild.
+TEST(DistributedFluid, FirstLayoutIsSetUpNotAStep) {
+  const FluidSetup f = dam_setup();
+  auto s = distributed_stage(f);
+  const auto first = s->stage_seconds();
+  ASSERT_TRUE(first.contains("sph.setup"));
+  EXPECT_GT(first.at("sph.setup"), 0.0);
+  EXPECT_EQ(first.size(), 1u);
+  step(*s);
+  const auto after = s->stage_seconds();
+  EXPECT_EQ(after.at("sph.setup"), first.at("sph.setup"));
+  EXPECT_TRUE(after.contains("sph.halo"));
+}
+
 // The ghost search splits a rank's particles into a block per thread (each with its own
 // table of band cells): the layout (owned particles, then ghosts, in order) is the same for
 // any thread count. A finer dam (~50,000 particles) so that every rank's share is split.
