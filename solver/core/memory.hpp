@@ -198,7 +198,8 @@ void resize_for_overwrite(std::vector<T>& v, std::size_t n) {
 // MPI sends from and receives into (parallel/comm_plan.hpp). Page-locked when this process uses
 // a GPU, so those copies run at the link's speed (H100 host, 1 MB: 38.7 GB/s pinned against
 // 8.4 GB/s pageable; references/benchmarks/scaling/2026-11-25_h100x2/); plain memory otherwise.
-// Storage grows only; resize() keeps no contents.
+// Storage grows only, with 1/8 room (a layout rebuild's arrays grow a little); resize() keeps no
+// contents.
 class StagingBytes {
  public:
   StagingBytes() = default;
@@ -207,7 +208,7 @@ class StagingBytes {
   StagingBytes& operator=(const StagingBytes&) = delete;
   void resize(std::size_t n) {
     if (n > cap_) {
-      const std::size_t want = cap_ > 0 ? n + n / 8 : n;  // as a Buffer grows
+      const std::size_t want = n + n / 8;  // page-locking again is slow: room from the first
       staging_free(p_, pinned_);
       p_ = nullptr, cap_ = 0;  // consistent should the allocation throw
       p_ = static_cast<std::byte*>(staging_alloc(want, &pinned_));

@@ -88,13 +88,9 @@ TEST(Memory, HostWorkArraysGrowWithRoom) {
   StagingBytes b;
   b.resize(800);
   const std::byte* q = b.data();
-  b.resize(800);
+  b.resize(900);  // within the 1/8 room
   EXPECT_EQ(b.data(), q);
-  b.resize(1600);
-  const std::byte* r = b.data();
-  b.resize(1800);  // within the 1/8 room of the second allocation
-  EXPECT_EQ(b.data(), r);
-  EXPECT_EQ(b.size(), 1800u);
+  EXPECT_EQ(b.size(), 900u);
 }
 
 TEST(Memory, GatherAndScatterByIndex) {
