@@ -1,8 +1,9 @@
 // Communication as plans (STYLE.md item 6): MigratePlan moves items to new owner ranks,
 // HaloPlan gives neighbour ranks copies of the items in the halo band (gather) and adds the
-// copies' contributions back to the owners (scatter-add). Both are built once per
-// decomposition from (item -> destination ranks) lists and applied to any number of fields
-// every step; both run on one pack/send/unpack engine (CommEngine).
+// copies' contributions back to the owners (scatter-add). Both are built per decomposition
+// from (item -> destination ranks) lists (a layout rebuild plans them again on the same engine,
+// replan()) and applied to any number of fields every step; both run on one pack/send/unpack
+// engine (CommEngine).
 //
 // Overlap: begin() packs and posts non-blocking sends and receives, finish() waits and
 // unpacks; interior work that does not touch the destination slots goes in between. One
