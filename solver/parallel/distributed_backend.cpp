@@ -364,7 +364,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   // band's displacement test; halo.xv: the ghosts' x, v; halo.shares: the contact force shares'
   // exchange; elements.shares: collecting them from the backend), and a rebuild's (export: the
   // state from the backend; state: owners and migration plans; layout: the rank's new part
-  // and its model; upload: into the backend).
+  // and, of it, layout.model its model; upload: into the backend, of it upload.model the
+  // model).
   std::map<std::string, double> stage_seconds() const override {
     std::map<std::string, double> mine = local_stage_seconds();
     for (const auto& [k, v] : timers_.seconds())
@@ -381,8 +382,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
                                            "migration.layout",
                                            "migration.upload",
                                            "migration.layout.model",
-                                           "migration.upload.model",
-                                           "migration.upload.halo"};
+                                           "migration.upload.model"};
     constexpr int n = std::size(keys);
     double v[n], mx[n];
     for (int k = 0; k < n; ++k) {
