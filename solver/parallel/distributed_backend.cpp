@@ -367,32 +367,14 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   // and, of it, layout.model its model; upload: into the backend, of it upload.model the
   // model).
   std::map<std::string, double> stage_seconds() const override {
-    std::map<std::string, double> mine = local_stage_seconds();
-    for (const auto& [k, v] : timers_.seconds())
-      if (k.find('.') != std::string::npos) mine[k] = v;
-    static constexpr const char* keys[] = {"contact.broad",
-                                           "contact.narrow",
-                                           "contact.force",
-                                           "halo.skin",
-                                           "halo.xv",
-                                           "halo.shares",
-                                           "elements.shares",
-                                           "migration.export",
-                                           "migration.state",
-                                           "migration.layout",
-                                           "migration.upload",
-                                           "migration.layout.model",
-                                           "migration.upload.model"};
-    constexpr int n = std::size(keys);
+    const std::map<std::string, double> mine = local_sub_phases();
+    constexpr int n = std::size(kBodySubPhases);
     double v[n], mx[n];
-    for (int k = 0; k < n; ++k) {
-      const auto it = mine.find(keys[k]);
-      v[k] = it == mine.end() ? 0.0 : it->second;
-    }
+    for (int k = 0; k < n; ++k) v[k] = seconds_of(mine, kBodySubPhases[k]);
     MPI_Allreduce(v, mx, n, MPI_DOUBLE, MPI_MAX, comm_);
     std::map<std::string, double> out;
     for (int k = 0; k < n; ++k)
-      if (contact_ || k >= 3) out[keys[k]] = mx[k];
+      if (contact_ || k >= 3) out[kBodySubPhases[k]] = mx[k];  // the first 3: contact.*
     return out;
   }
 
@@ -579,6 +561,24 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       r.phases_mean[kParallelPhases[k]] = sum[k] / np_;
     }
     r.setup_s = mx[8];
+    // Every rank's phases and sub-phases side by side, on rank 0 (which writes the record).
+    const std::map<std::string, double> subs = local_sub_phases();
+    std::vector<double> row(p, p + 8);
+    for (const char* k : kBodySubPhases) row.push_back(sec(subs, k));
+    for (const char* k : kFluidSubPhases) row.push_back(sec(run_phases, k));
+    const int w = static_cast<int>(row.size());
+    std::vector<double> rows(me_ == 0 ? static_cast<std::size_t>(w) * np_ : 0);
+    MPI_Gather(row.data(), w, MPI_DOUBLE, rows.data(), w, MPI_DOUBLE, 0, comm_);
+    for (int q = 0; me_ == 0 && q < np_; ++q) {
+      std::map<std::string, double>& m = r.phases_by_rank.emplace_back();
+      int c = 0;
+      for (const char* k : kParallelPhases) m[k] = rows[q * w + c++];
+      auto sub = [&](const char* k) {  // sub-phases a rank did not time are left out
+        if (const double v = rows[q * w + c++]; v != 0) m[k] = v;
+      };
+      for (const char* k : kBodySubPhases) sub(k);
+      for (const char* k : kFluidSubPhases) sub(k);
+    }
     r.owned_vertices = allgatherv(comm_, std::vector<std::int64_t>{L_.n_owned});
     r.owned_tets = allgatherv(comm_, std::vector<std::int64_t>{L_.n_home});
     double b[3] = {static_cast<double>(migrated_bytes_), static_cast<double>(halo_bytes_),
@@ -733,6 +733,13 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     return band_key(c.i[0], c.i[1], c.i[2]);
   }
 
+  // This rank's sub-phases: its contact stage's and its timers' (names with a dot).
+  std::map<std::string, double> local_sub_phases() const {
+    std::map<std::string, double> mine = local_stage_seconds();
+    for (const auto& [k, v] : timers_.seconds())
+      if (k.find('.') != std::string::npos) mine[k] = v;
+    return mine;
+  }
   std::map<std::string, double> local_stage_seconds() const {
     std::map<std::string, double> s = contact_acc_;
     for (const auto& [k, v] : local_->stage_seconds()) s[k] += v;

@@ -50,6 +50,13 @@ Json ParallelRecord::to_json() const {
     log.push_back(r);
   }
   j["rebalance_log"] = log;
+  Json by_rank = Json::array();
+  for (const auto& m : phases_by_rank) {
+    Json r = Json::object();
+    for (const auto& [k, v] : m) r[k] = v;
+    by_rank.push_back(r);
+  }
+  j["phases_by_rank"] = by_rank;
   return j;
 }
 
@@ -63,6 +70,7 @@ ParallelRecord serial_parallel_record(const Model& model, const std::string& cur
     const auto it = phases.find(p);
     r.phases_max[p] = r.phases_mean[p] = it == phases.end() ? 0.0 : it->second;
   }
+  r.phases_by_rank = {r.phases_max};
   return r;
 }
 

@@ -28,6 +28,11 @@
 //                        first layout
 //   rebalance_log        [{step, imbalance_before, imbalance_after, bytes}]; imbalance_after
 //                        is measured over the next window (or the rest of the run)
+//   phases_by_rank       per rank, its seconds of kParallelPhases (as in phases_*) and of the
+//                        sub-phases it timed (kBodySubPhases, kFluidSubPhases, as in summary.json's
+//                        phases: the first distribution's included; zeros left out): a part that
+//                        ends in a collective holds the wait for slower ranks, which only the
+//                        ranks side by side show
 #pragma once
 
 #include <cstdint>
@@ -43,6 +48,33 @@ namespace qdemsph {
 
 inline constexpr const char* kParallelPhases[] = {"elements", "integration", "contact", "sph",
                                                   "halo",     "migration",   "balance", "output"};
+
+// Sub-phases of a distributed run (docs/parallel.md, "Records"): the bodies' (in summary.json's
+// phases the largest over ranks) and the fluid stage's (rank 0's there).
+inline constexpr const char* kBodySubPhases[] = {"contact.broad",
+                                                 "contact.narrow",
+                                                 "contact.force",
+                                                 "halo.skin",
+                                                 "halo.xv",
+                                                 "halo.shares",
+                                                 "elements.shares",
+                                                 "migration.export",
+                                                 "migration.state",
+                                                 "migration.layout",
+                                                 "migration.layout.model",
+                                                 "migration.upload",
+                                                 "migration.upload.model"};
+inline constexpr const char* kFluidSubPhases[] = {"sph.halo",
+                                                  "sph.halo.skin",
+                                                  "sph.halo.mpi",
+                                                  "sph.rebuild",
+                                                  "sph.rebuild.out",
+                                                  "sph.rebuild.owners",
+                                                  "sph.rebuild.migrate",
+                                                  "sph.rebuild.ghosts",
+                                                  "sph.rebuild.halo",
+                                                  "sph.rebuild.in",
+                                                  "sph.setup"};
 
 struct RebalanceEntry {
   std::int64_t step = 0;
@@ -66,6 +98,7 @@ struct ParallelRecord {
   std::vector<std::int64_t> owned_vertices, owned_tets;
   std::map<std::string, double> phases_max, phases_mean;
   std::vector<RebalanceEntry> rebalance_log;
+  std::vector<std::map<std::string, double>> phases_by_rank;
 
   // The distributed fluid's fields from its exchange's traffic.
   void set_fluid(const FluidTraffic& t);

@@ -17,7 +17,7 @@ HERE = Path(__file__).resolve().parent
 PARALLEL_KEYS = {"ranks", "curve", "rebalances", "rebuilds", "contact_slack", "imbalance", "imbalance_initial", "migrated_bytes",
                  "halo_bytes_per_step", "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "fluid_rebuilds", "fluid_skin", "setup_s",
                  "owned_vertices",
-                 "owned_tets", "phases_max", "phases_mean", "rebalance_log"}
+                 "owned_tets", "phases_max", "phases_mean", "rebalance_log", "phases_by_rank"}
 PHASES = {"elements", "integration", "contact", "sph", "halo", "migration", "balance", "output"}
 # Rebalance (and migrate) at every measurement so that the run crosses many decompositions.
 REBALANCE = ["parallel.rebalance_every=25", "parallel.rebalance_threshold=0"]
@@ -70,6 +70,14 @@ def test_same_as_one_rank(ranks, curve, qdemsph, checks, case_out):
     checks.check(m + "parallel_keys_extra", len(set(par) - PARALLEL_KEYS), kind="max", tolerance=0)
     checks.check(m + "ranks", par.get("ranks", 0), kind="abs", reference=ranks, tolerance=0)
     checks.check(m + "phases", len(PHASES - set(par.get("phases_max", {}))), kind="max", tolerance=0)
+    by_rank = par.get("phases_by_rank", [])
+    checks.check(m + "phases_by_rank", len(by_rank), kind="abs", reference=ranks, tolerance=0,
+                 note="one entry per rank")
+    checks.check(m + "phases_by_rank_missing", sum(len(PHASES - set(r)) for r in by_rank), kind="max",
+                 tolerance=0)
+    checks.check(m + "phases_by_rank_max", max((r.get("elements", 0) for r in by_rank), default=-1), kind="rel",
+                 reference=par.get("phases_max", {}).get("elements", 0), tolerance=1e-12,
+                 note="the largest rank's elements time is phases_max's")
     nfv = one.summary["parallel"]["owned_vertices"][0]
     nft = one.summary["parallel"]["owned_tets"][0]
     checks.check(m + "owned_vertices_sum", sum(par.get("owned_vertices", [])), kind="abs", reference=nfv,
