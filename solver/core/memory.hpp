@@ -181,7 +181,6 @@ class Vec3Buffer {
   Buffer<double> x_, y_, z_;
 };
 
-// Host bytes copied to or from a device at every step: a GPU rank's packed halo records, which
 // A host work array of n elements that the caller rewrites (a layout rebuild's, kept from one
 // rebuild to the next): within its capacity the allocation stands; outgrowing it, nothing is
 // copied and 1/8 more room is taken, so that a size creeping up reallocates (copies, and
@@ -195,6 +194,7 @@ void resize_for_overwrite(std::vector<T>& v, std::size_t n) {
   v.resize(n);
 }
 
+// Host bytes copied to or from a device at every step: a GPU rank's packed halo records, which
 // MPI sends from and receives into (parallel/comm_plan.hpp). Page-locked when this process uses
 // a GPU, so those copies run at the link's speed (H100 host, 1 MB: 38.7 GB/s pinned against
 // 8.4 GB/s pageable; references/benchmarks/scaling/2026-11-25_h100x2/); plain memory otherwise.

@@ -24,11 +24,13 @@ std::vector<CommField> fields_of(FluidParticles& p) {
           comm_field(p.type), comm_field(p.gid), comm_field(p.key)};
 }
 
+using qdemsph::resize_for_overwrite;  // beside the overload for FluidParticles below
+
 // The fields at n items, contents not kept (resize_for_overwrite): room for 1/8 more, so that
 // appending the ghosts to the owned items does not reallocate.
 void resize_for_overwrite(FluidParticles& p, std::int64_t n) {
   const auto k = static_cast<std::size_t>(n);
-  auto each = [&](auto&... v) { (qdemsph::resize_for_overwrite(v, k), ...); };
+  auto each = [&](auto&... v) { (resize_for_overwrite(v, k), ...); };
   each(p.x, p.v, p.rho, p.m, p.type, p.gid, p.key);
 }
 
@@ -77,7 +79,7 @@ class MpiFluidExchange final : public FluidExchange {
     if (dec_.splitters.empty() || rebalance_) {
       std::span<const double> cost = p.cost;
       if (p.cost.size() != p.size()) {  // not measured yet
-        qdemsph::resize_for_overwrite(cost_, n);
+        resize_for_overwrite(cost_, n);
         for_each(HostExec{}, n,
                  [&](std::int64_t i) { cost_[i] = p.type[i] == kSphFluid ? 1.0 : kFluidWallCost; });
         cost = cost_;
@@ -89,7 +91,7 @@ class MpiFluidExchange final : public FluidExchange {
     rebalance_ = false;
 
     // Owned particles to the owners of their positions, into o_ (its storage reused).
-    qdemsph::resize_for_overwrite(dest_, n);
+    resize_for_overwrite(dest_, n);
     for_each(HostExec{}, n,
              [&](std::int64_t i) { dest_[i] = owner_of_key(dec_.splitters, curve_key_[i]); });
     part.emplace(timers, "sph.rebuild.migrate");
@@ -213,7 +215,7 @@ class MpiFluidExchange final : public FluidExchange {
     const std::int64_t nb = nown >= kMinParallel ? omp_get_max_threads() : 1;
     const auto lo = [&](std::int64_t b) { return nown * b / nb; };
     if (static_cast<std::int64_t>(g.block.size()) < nb) g.block.resize(nb);
-    qdemsph::resize_for_overwrite(g.cell_of, nown);
+    resize_for_overwrite(g.cell_of, nown);
     // Each block's distinct cells, in the order of their first particle (one lookup for a run
     // of particles in the same cell), and whether each is on the piece's border.
 #pragma omp parallel for schedule(static) if (nb > 1)
@@ -260,7 +262,7 @@ class MpiFluidExchange final : public FluidExchange {
     g.occupied_off.push_back(static_cast<std::int64_t>(g.occupied.size()));
     // Per cell of each block, the other ranks within the band (sorted, once each); per
     // particle, its cell's count.
-    qdemsph::resize_for_overwrite(g.off, nown + 1);
+    resize_for_overwrite(g.off, nown + 1);
     g.off[0] = 0;
 #pragma omp parallel for schedule(static) if (nb > 1)
     for (std::int64_t b = 0; b < nb; ++b) {
@@ -287,7 +289,7 @@ class MpiFluidExchange final : public FluidExchange {
     }
     std::partial_sum(g.off.begin(), g.off.end(), g.off.begin());
     // Per particle, its cell's ranks.
-    qdemsph::resize_for_overwrite(g.ranks, g.off[nown]);
+    resize_for_overwrite(g.ranks, g.off[nown]);
 #pragma omp parallel for schedule(static) if (nb > 1)
     for (std::int64_t b = 0; b < nb; ++b) {
       const GhostBlock& w = g.block[b];
