@@ -77,15 +77,14 @@ class MpiFluidExchange final : public FluidExchange {
     part.emplace(timers, "sph.rebuild.owners");
     // Each particle's curve key on the decomposition's grid (a new cut computes them anyway).
     if (dec_.splitters.empty() || rebalance_) {
-      // The measured costs, else the guesses by type; in seconds where this rank's seconds
-      // per unit cost were measured (recut_scale_).
-      const bool measured = p.cost.size() == p.size();
-      const double scale = recut_scale_ > 0 ? recut_scale_ : 1.0;
-      resize_for_overwrite(cost_, n);
-      for_each(HostExec{}, n, [&](std::int64_t i) {
-        cost_[i] = scale * (measured ? p.cost[i] : p.type[i] == kSphFluid ? 1.0 : kFluidWallCost);
-      });
-      dec_ = balance(comm_, p.x, cost_, curve_, max_cell_, &curve_key_);
+      std::span<const double> cost = p.cost;
+      if (p.cost.size() != p.size()) {  // not measured yet
+        resize_for_overwrite(cost_, n);
+        for_each(HostExec{}, n,
+                 [&](std::int64_t i) { cost_[i] = p.type[i] == kSphFluid ? 1.0 : kFluidWallCost; });
+        cost = cost_;
+      }
+      dec_ = balance(comm_, p.x, cost, curve_, max_cell_, &curve_key_);
     } else {
       grid_keys(dec_.grid, p.x, curve_key_);
     }
@@ -124,7 +123,7 @@ class MpiFluidExchange final : public FluidExchange {
     return nown;
   }
 
-  bool keep(double moved, FluidLoad load) override {
+  bool keep(double moved, double load) override {
     ++steps_;
     ++evaluations_;
     time_step();
@@ -139,11 +138,6 @@ class MpiFluidExchange final : public FluidExchange {
     return false;
   }
   bool wants_load() const override { return every_ > 0 && (steps_ + 1) % every_ == 0; }
-  bool recut_at_set_up(FluidLoad load) override {
-    ++evaluations_;
-    rebalance_ = every_ > 0 && measure(load).imbalance > kSetUpRecutShare * threshold_;
-    return rebalance_;
-  }
   double skin() const override { return skin_; }
 
   const std::vector<std::int64_t>& send_slots() const override {
@@ -358,35 +352,19 @@ class MpiFluidExchange final : public FluidExchange {
     return true;
   }
 
-  // The ranks' loads: max / mean - 1 and 1 - mean / max of their busy seconds where every
-  // rank measured them (else of their costs), and this rank's seconds per unit cost for the
-  // next cut (recut_scale_). The same on every rank but the scale. Collective.
-  struct Spread {
-    double imbalance = 0, excess = 0;
-  };
-  Spread measure(FluidLoad load) {
-    double sum[2] = {load.cost, load.busy_s};
-    allreduce_sum_same(comm_, sum, 2);
-    double most[3] = {load.cost, load.busy_s, load.busy_s > 0 ? 0.0 : 1.0};
-    MPI_Allreduce(MPI_IN_PLACE, most, 3, MPI_DOUBLE, MPI_MAX, comm_);
-    const bool timed = most[2] == 0;
-    recut_scale_ = timed && load.cost > 0 ? load.busy_s / load.cost : 0.0;
-    const double mean = sum[timed] / np_, mx = most[timed];
-    if (!(mean > 0)) return {};
-    return {mx / mean - 1, 1 - mean / mx};
-  }
-
-  // Every rebalance_every steps: the ranks' imbalance (measure) against the threshold, and
-  // whether a new cut pays for its layout rebuild (recut_pays; a threshold of 0 re-cuts at
-  // every measurement). The same decision on every rank.
-  bool rebalance_due(FluidLoad load) {
+  // Every rebalance_every steps: the owned cost's max / mean - 1 over the ranks against the
+  // threshold, and whether a new cut pays for its layout rebuild (recut_pays; a threshold of
+  // 0 re-cuts at every measurement). The same decision on every rank.
+  bool rebalance_due(double load) {
     if (every_ <= 0 || steps_ % every_ != 0) return false;
-    const Spread s = measure(load);
-    double most[2] = {window_n_ > 0 ? window_s_ / window_n_ : 0.0, rebuild_s_};
-    MPI_Allreduce(MPI_IN_PLACE, most, 2, MPI_DOUBLE, MPI_MAX, comm_);
+    double total = load;
+    allreduce_sum_same(comm_, &total, 1);
+    double most[3] = {load, window_n_ > 0 ? window_s_ / window_n_ : 0.0, rebuild_s_};
+    MPI_Allreduce(MPI_IN_PLACE, most, 3, MPI_DOUBLE, MPI_MAX, comm_);
     window_s_ = 0, window_n_ = 0;
-    if (!(s.imbalance > threshold_)) return false;
-    return threshold_ == 0 || recut_pays(s.excess, most[0], every_, most[1]);
+    const double mean = total / np_;
+    if (!(mean > 0 && most[0] / mean - 1 > threshold_)) return false;
+    return threshold_ == 0 || recut_pays(1 - mean / most[0], most[1], every_, most[2]);
   }
 
   // The wall time between keep() calls: a step's (window_s_ / window_n_, and since_s_ since
@@ -432,7 +410,6 @@ class MpiFluidExchange final : public FluidExchange {
   BandGrid band_;                 // band cells: half of support + skin wide, wrapping a periodic z
   long steps_ = 0;                // keep() calls
   bool rebalance_ = false;        // the next distribute() cuts the partition again
-  double recut_scale_ = 0;        // this rank's seconds per unit cost at the last measure()
   // Wall times the re-cut decision weighs (time_step): steps since the last measurement, and
   // the longest layout rebuild so far (the exchange's part, then the whole interval).
   double last_keep_ = 0, window_s_ = 0, since_s_ = 0, rebuild_s_ = 0;

@@ -3,21 +3,16 @@
 //
 // Ownership: a particle (fluid or wall) belongs to the rank whose piece of the space-filling
 // curve holds its position (balance.hpp: the fluid's own cell tree, cut by particle cost: the
-// neighbour candidates each particle visited in the last evaluation, sph_stage.hpp, times its
-// rank's measured seconds per candidate, which differ between regions: on two H200s the dam
-// break's rank by the end wall took 11 % longer per candidate than the other; before any
-// evaluation, 1 per fluid particle and kFluidWallCost per wall particle). The first cut is by
-// those guesses; the set-up times one more evaluation on every rank and cuts again when the
-// ranks' seconds differ by more than kSetUpRecutShare of the rebalance threshold.
-// distribute() migrates the owned particles to the owners of their positions (MigratePlan)
-// and builds the ghosts (HaloPlan): a particle goes to every rank that owns a particle in the
-// 5^3 band cells of half a kernel support + skin around its own cell, i.e. to every rank with
-// an owned particle within support + skin of it. The stage calls distribute() only when
-// keep() says the layout no longer holds: some particle moved more than skin / 2 since (one
-// MPI_Allreduce of the largest displacement per step), or the partition is cut again (every
-// rebalance_every steps, when the ranks' busy seconds' max / mean - 1 exceeds
-// rebalance_threshold and the new cut pays for its rebuild: rebuild_policy.hpp); between,
-// the ghosts' x and v are refreshed through the same HaloPlan at each step.
+// neighbour candidates each particle visited in the last evaluation, sph_stage.hpp; before
+// any, 1 per fluid particle and kFluidWallCost per wall particle). distribute() migrates the owned
+// particles to the owners of their positions (MigratePlan) and builds the ghosts (HaloPlan):
+// a particle goes to every rank that owns a particle in the 5^3 band cells of half a kernel
+// support + skin around its own cell, i.e. to every rank with an owned particle within
+// support + skin of it. The stage calls distribute() only when keep() says the layout no
+// longer holds: some particle moved more than skin / 2 since (one MPI_Allreduce of the
+// largest displacement per step), or the partition is cut again (every rebalance_every
+// steps, when the owned cost's max / mean - 1 exceeds rebalance_threshold); between, the
+// ghosts' x and v are refreshed through the same HaloPlan at each step.
 #pragma once
 
 #include <memory>

@@ -27,9 +27,4 @@ inline bool recut_pays(double excess, double step_s, long every, double rebuild_
   return excess * step_s * static_cast<double>(every) > rebuild_s;
 }
 
-// A set-up re-cut (the fluid's, from the seconds of an evaluation: FluidExchange::
-// recut_at_set_up) is taken above this share of the rebalance threshold: it is paid once,
-// before the steps, where a periodic one is weighed against the steps until the next check.
-inline constexpr double kSetUpRecutShare = 0.25;
-
 }  // namespace qdemsph

@@ -43,14 +43,6 @@ struct FluidParticles {
   std::size_t size() const { return x.size(); }
 };
 
-// A rank's measured load: what its owned particles cost in the last evaluation (the
-// neighbour candidates they visited, sph_stage.hpp) and the seconds its passes took since the
-// last measurement, its communication left out. 0: not measured.
-struct FluidLoad {
-  double cost = 0;
-  double busy_s = 0;
-};
-
 // What a distributed fluid sent between ranks so far, summed over the ranks (summary.json
 // `parallel`: docs/parallel.md, "Records"). Bytes sent to another rank; a rank's copies to
 // itself are not counted.
@@ -72,19 +64,13 @@ class FluidExchange {
   // (sph.rebuild.owners, .migrate, .ghosts, .halo). Collective.
   virtual std::int64_t distribute(FluidParticles& p, PhaseTimers& timers) = 0;
   // At each step after the first distribute(): true when the layout still holds, given this
-  // rank's largest displacement of an owned particle since distribute() and its load (false:
-  // the largest displacement over the ranks exceeds skin() / 2, or the partition is due to be
-  // cut again; call distribute()). The same answer on every rank. Collective.
-  virtual bool keep(double moved, FluidLoad load) = 0;
-  // Whether the next keep() reads `load` (a measurement is due); otherwise {} will do.
+  // rank's largest displacement of an owned particle since distribute() and its owned
+  // particles' cost in the last evaluation (0: not measured) (false: the largest displacement
+  // over the ranks exceeds skin() / 2, or the partition is due to be cut again; call
+  // distribute()). The same answer on every rank. Collective.
+  virtual bool keep(double moved, double load) = 0;
+  // Whether the next keep() reads `load` (a measurement is due); otherwise 0 will do.
   virtual bool wants_load() const = 0;
-  // Set-up, after the first layout's evaluation: this rank's load over one more evaluation
-  // (counted as one). True when the partition is to be cut again before the first step: the
-  // ranks' seconds differ by more than a quarter of the rebalance threshold (the cut by
-  // candidates leaves the seconds per candidate, which differ between regions, out); the
-  // next distribute() then weighs each rank's costs by its seconds per unit cost.
-  // Collective.
-  virtual bool recut_at_set_up(FluidLoad load) = 0;
   // The ghost band's margin beyond the kernel support.
   virtual double skin() const = 0;
   // Owned values -> ghost slots of the layout distribute() returned, in records the caller

@@ -24,7 +24,6 @@
 
 #include <algorithm>
 #include <bit>
-#include <chrono>
 #include <cmath>
 #include <initializer_list>
 #include <memory>
@@ -131,10 +130,8 @@ class SphStage final : public FluidStage {
     if (!ex_) sort();  // groups contiguous before the first compute places the markers
     setting_up_ = true;
     compute();
-    if (ex_ && ex_->size() > 1) recut_by_time();
     setting_up_ = false;
     timers_.clear_except("sph.setup");  // the first layout is set-up, not a step's upkeep
-    busy_s_ = 0;
   }
 
   void kick(double h) override {
@@ -162,8 +159,6 @@ class SphStage final : public FluidStage {
   }
 
   void compute() override {
-    const auto t0 = std::chrono::steady_clock::now();
-    const double u0 = upkeep_s();
     // The fluid step since the last compute: the density update's dt and the markers' H.
     const double ddt = pending_dt_;
     pending_dt_ = 0;
@@ -176,7 +171,7 @@ class SphStage final : public FluidStage {
         exec_sync(Exec{});  // the work before is the step's (timers_ below)
         auto s = timers_.scope("sph.halo");
         auto s1 = timers_.scope("sph.halo.skin");
-        keep = laid_out_ && ex_->keep(moved(), ex_->wants_load() ? load() : FluidLoad{});
+        keep = laid_out_ && ex_->keep(moved(), ex_->wants_load() ? owned_cost() : 0.0);
       }
       if (keep) {
         refresh_positions();
@@ -186,14 +181,6 @@ class SphStage final : public FluidStage {
       }
     }
     sort();
-    passes(ddt);
-    // The device work of the passes ends in the next compute()'s first synchronisation.
-    busy_s_ += seconds_since(t0) - (upkeep_s() - u0);
-  }
-
-  // The passes of an evaluation at the sorted positions (density, equation of state, walls and
-  // markers, forces, the fluid's force on the bodies), ddt the fluid step since the last one.
-  void passes(double ddt) {
     const SphParams P = P_;
     const CellGrid g = grid_;
     const std::int64_t* start = start_.cview().p;
@@ -322,8 +309,6 @@ class SphStage final : public FluidStage {
           });
       if (ex_) {
         // Each marker's force comes from the rank that owns it (the others hold zero).
-        auto s = timers_.scope("sph.halo");
-        auto s1 = timers_.scope("sph.halo.mpi");
         const std::size_t bytes = nm_ * sizeof(double);
         std::vector<double> h(nm_);
         double* const comp[3] = {F.x, F.y, F.z};
@@ -602,44 +587,6 @@ class SphStage final : public FluidStage {
   }
 
   // Distributed: the owned particles' cost in the last compute() (0 before the first).
-  // Distributed set-up, after the first layout's evaluation: the passes once more, timed (on a
-  // GPU the first launches are past), and the partition cut again when the ranks' seconds
-  // differ enough (FluidExchange::recut_at_set_up), then evaluated on the new layout.
-  void recut_by_time() {
-    exec_sync(Exec{});
-    const auto t0 = std::chrono::steady_clock::now();
-    const double u0 = upkeep_s();
-    passes(0.0);  // no fluid step yet: the same state
-    exec_sync(Exec{});
-    if (!ex_->recut_at_set_up({owned_cost(), seconds_since(t0) - (upkeep_s() - u0)})) return;
-    {
-      auto s = timers_.scope("sph.setup");
-      redistribute();
-    }
-    sort();
-    passes(0.0);
-  }
-
-  // This rank's load for a measurement (FluidExchange::keep): its owned cost in the last
-  // evaluation and its busy seconds since the last measurement.
-  FluidLoad load() {
-    const FluidLoad l{owned_cost(), busy_s_};
-    busy_s_ = 0;
-    return l;
-  }
-  // Seconds in the layout's upkeep (timers_): what the busy seconds leave out.
-  double upkeep_s() const {
-    double u = 0;
-    for (const char* k : {"sph.halo", "sph.rebuild", "sph.setup"}) {
-      const auto it = timers_.seconds().find(k);
-      if (it != timers_.seconds().end()) u += it->second;
-    }
-    return u;
-  }
-  static double seconds_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  }
-
   double owned_cost() {
     const auto c = cost_.cview();
     const auto slot = slot_.cview();
@@ -843,9 +790,6 @@ class SphStage final : public FluidStage {
   // passes' device work is not counted in it. One rank times nothing here (no
   // synchronisation added).
   PhaseTimers timers_{[] { exec_sync(Exec{}); }};
-  // Distributed: seconds in compute() outside the upkeep since the last measurement (load()),
-  // the passes' device work included (it ends in the next compute()'s first synchronisation).
-  double busy_s_ = 0;
 };
 
 }  // namespace qdemsph

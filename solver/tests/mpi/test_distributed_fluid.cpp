@@ -391,8 +391,7 @@ TEST(DistributedFluid, LayoutDoesNotDependOnTheThreadCount) {
 }
 
 // The stage's traffic over a run: one evaluation per compute() (the constructor's and one
-// per step; on several ranks the set-up's timed one and, at threshold 0, the one after its
-// re-cut), rebuilds by the skin rule and the cuts, and on one rank nothing sent.
+// per step), rebuilds by the skin rule and the cuts, and on one rank nothing sent.
 TEST(DistributedFluid, StageTrafficPerEvaluation) {
   const FluidSetup f = dam_setup();
   auto ex = make_fluid_exchange(options(50, 0.0), f);
@@ -403,8 +402,8 @@ TEST(DistributedFluid, StageTrafficPerEvaluation) {
   const FluidTraffic t = x->traffic();
   ParallelRecord r;
   r.set_fluid(t);
-  EXPECT_EQ(t.evaluations, kSteps + (size_of() > 1 ? 3 : 1));
-  EXPECT_GE(t.rebuilds, size_of() > 1 ? 2 : 1);  // the set-up's, then the skin rule and the cuts
+  EXPECT_EQ(t.evaluations, kSteps + 1);
+  EXPECT_GE(t.rebuilds, 1);  // the first layout, then the skin rule and the cuts
   if (size_of() == 1) {
     EXPECT_EQ(r.fluid_halo_bytes_per_step, 0.0);
     EXPECT_EQ(r.fluid_migrated_bytes, 0);
@@ -527,54 +526,4 @@ TEST(DistributedFluid, PartitionWeighsTheMeasuredCosts) {
     EXPECT_GT(w[1], 0.1);          // the cheap part's ranks own more particles
     EXPECT_GT(c[0], w[0] + 0.05);  // a cut without the costs leaves them less even
   }
-}
-
-// The set-up re-cut weighs each rank's costs by its measured seconds per unit cost: rank 0
-// reports its passes twice as slow per candidate as the others, so after the new cut the
-// ranks' seconds are even to 0.1 (as the costs are in PartitionWeighsTheMeasuredCosts) and
-// rank 0 holds markedly fewer particles; ranks whose seconds are even (within a quarter of the
-// 0.1 threshold) keep the cut, and a static partition (threshold 1e9) keeps it whatever the
-// seconds.
-TEST(DistributedFluid, SetUpRecutEvensTheMeasuredSeconds) {
-  const FluidSetup f = dam_setup();
-  const int me = rank_of(), np = size_of();
-  const double slowdown = me == 0 ? 2.0 : 1.0;
-  // After a first layout by uniform measured costs, each rank's load with rank 0 `slow` x
-  // as slow per candidate: {whether a re-cut was taken, this rank's owned count after it}.
-  auto recut = [&](double threshold, bool slow) {
-    auto ex = make_fluid_exchange(options(50, threshold), f);
-    FluidParticles p = share_of(f);
-    p.cost.assign(p.size(), 1.0);
-    PhaseTimers parts;
-    std::int64_t nown = ex->distribute(p, parts);
-    const double cost = static_cast<double>(nown);
-    const bool taken = ex->recut_at_set_up({cost, 1e-6 * cost * (slow ? slowdown : 1.0)});
-    p.x.resize(nown), p.v.resize(nown), p.rho.resize(nown), p.m.resize(nown);
-    p.type.resize(nown), p.gid.resize(nown), p.key.resize(nown);
-    p.cost.assign(nown, 1.0);
-    if (taken) nown = ex->distribute(p, parts);
-    return std::pair{taken, static_cast<double>(nown)};
-  };
-  const auto even = recut(0.1, false), slow = recut(0.1, true), fixed = recut(1e9, true);
-  EXPECT_FALSE(even.first);
-  EXPECT_FALSE(fixed.first);
-  if (np == 1) {
-    EXPECT_FALSE(slow.first);  // one rank: nothing to even
-    return;
-  }
-  ASSERT_TRUE(slow.first);
-  // {max / mean - 1 of the seconds, rank 0's count / the mean count of the others}.
-  double sec[2] = {slowdown * slow.second, slowdown * slow.second};
-  MPI_Allreduce(MPI_IN_PLACE, &sec[0], 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  MPI_Allreduce(MPI_IN_PLACE, &sec[1], 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
-  double counts[2] = {me == 0 ? slow.second : 0.0, me == 0 ? 0.0 : slow.second};
-  MPI_Allreduce(MPI_IN_PLACE, counts, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
-  const double spread = sec[0] / (sec[1] / np) - 1, ratio = counts[0] / (counts[1] / (np - 1));
-  if (me == 0)
-    std::printf(
-        "[fluid set-up re-cut, %d ranks] seconds spread %.3f; rank 0 (2 x the seconds "
-        "per candidate) owns %.2f x the particles of the others\n",
-        np, spread, ratio);
-  EXPECT_LE(spread, 0.1);
-  EXPECT_LT(ratio, 0.7);
 }
