@@ -86,6 +86,7 @@ def efficiencies(rs, mode):
     for r in rs:
         n = r["ranks"]
         row = {"ranks": n, "step_s": r["step_s"], "imbalance": r.get("imbalance"),
+               "busy_imbalance": r.get("busy_imbalance"),
                "halo_bytes_per_step": r.get("halo_bytes_per_step"),
                "fluid_halo_bytes_per_step": r.get("fluid_halo_bytes_per_step"), "size": r["size"]}
         for ref in (1, 8):
@@ -152,16 +153,16 @@ def plots(recs):
         if cop:
             md.append("E vs 1 = node x decomposition: *node* = t(1) / t(N copies of the 1-rank run at once, "
                       "one per core), *decomposition* = t(N copies) / t(N ranks).\n")
-        md.append("| ranks | tets | particles | ms/step | E vs 1 | E vs 8 | node | decomposition | imbalance | halo MB/step "
-                  "| fluid halo MB/step |")
-        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+        md.append("| ranks | tets | particles | ms/step | E vs 1 | E vs 8 | node | decomposition | imbalance | busy imbalance "
+                  "| halo MB/step | fluid halo MB/step |")
+        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
         for row in rows:
             f = lambda v, s="{:.3f}": "" if v is None else s.format(v)  # noqa: E731
             mb = lambda v: f(None if v is None else v / 1e6, "{:.2f}")  # noqa: E731
             md.append(f"| {row['ranks']} | {row['size']['n_tets']:,} | {row['size']['n_particles']:,} | "
                       f"{row['step_s'] * 1e3:.2f} | {f(row.get('E1'))} | {f(row.get('E8'))} | "
                       f"{f(row.get('node'))} | {f(row.get('decomp'))} | "
-                      f"{f(row['imbalance'])} | {mb(row['halo_bytes_per_step'])} | "
+                      f"{f(row['imbalance'])} | {f(row.get('busy_imbalance'))} | {mb(row['halo_bytes_per_step'])} | "
                       f"{mb(row.get('fluid_halo_bytes_per_step'))} |")
         # The model's geometry files are of the presets' sizes.
         pred = (model_line(rs, sweep, backend, ranks) if mode == "weak" and not variant and not params and len(rs) > 1

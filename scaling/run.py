@@ -160,6 +160,21 @@ def step_seconds(summary: dict) -> dict:
     return out
 
 
+# A rank's own work in parallel.phases_by_rank: the bodies' and the fluid's passes ("sph" there is
+# the fluid's without its halo refreshes and layout rebuilds), not the halo, migration, balance or
+# output, where a rank also waits for the others.
+BUSY = ("elements", "integration", "contact", "sph")
+
+
+def busy_imbalance(par: dict):
+    """max / mean - 1 over the ranks of their busy seconds over the whole run (BUSY, from
+    parallel.phases_by_rank); None without per-rank phases. Unlike parallel.imbalance (the bodies'
+    last measurement window) it counts the fluid."""
+    busy = [sum(float(m.get(k, 0.0)) for k in BUSY) for m in par.get("phases_by_rank") or []]
+    mean = sum(busy) / len(busy) if busy else 0.0
+    return max(busy) / mean - 1 if mean > 0 else None
+
+
 def make_record(meta, launch, summary, facts, run_wall, status, note="") -> dict:
     rec = {"schema": SCHEMA, "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
            "sweep": meta["sweep"], "case": meta["case"], "mode": meta["mode"], "variant": meta.get("variant"),
@@ -182,6 +197,7 @@ def make_record(meta, launch, summary, facts, run_wall, status, note="") -> dict
             for k in ("imbalance", "imbalance_initial", "halo_bytes_per_step", "migrated_bytes",
                       "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "fluid_rebuilds", "rebalances", "curve"):
                 rec[k] = par.get(k)
+            rec["busy_imbalance"] = busy_imbalance(par)
         c = summary.get("contact") or {}
         rec["items"] = {"tets": summary.get("n_tets") or 0, "vertices": summary.get("n_vertices") or 0,
                         "particles": ((summary.get("fluid") or {}).get("n_fluid") or 0) + ((summary.get("fluid") or {}).get("n_wall") or 0),
@@ -326,8 +342,10 @@ def run_sweep(a) -> list[dict]:
             records.append(rec)
             if status == "ok":
                 par = summary.get("parallel") or {}
+                busy = rec.get("busy_imbalance")
                 print(f"  N={n:3d} {var or '':9s} {rec['step_s'] * 1e3:9.2f} ms/step  wall {rec['wall_s']:.1f} s  "
-                      f"imbalance {par.get('imbalance', float('nan')):.3f}  halo {par.get('halo_bytes_per_step', 0) / 1e6:.2f} MB/step  "
+                      f"imbalance {par.get('imbalance', float('nan')):.3f}  "
+                      f"busy {float('nan') if busy is None else busy:.3f}  halo {par.get('halo_bytes_per_step', 0) / 1e6:.2f} MB/step  "
                       f"fluid halo {par.get('fluid_halo_bytes_per_step', 0) / 1e6:.2f} MB/step  "
                       f"phases/step " + " ".join(f"{k}={v * 1e3:.2f}" for k, v in rec["phases_per_step"].items() if v > 0),
                       flush=True)

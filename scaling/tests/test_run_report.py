@@ -39,6 +39,16 @@ def test_step_seconds_prefers_the_rank_mean_and_drops_output_and_subphases():
     assert serial["step_s"] == pytest.approx(0.5)
 
 
+def test_busy_imbalance_counts_the_fluid_passes_not_the_waits():
+    # Rank 1 waits for rank 0 in the halo; the fluid's passes make the difference.
+    par = {"imbalance": 0.01,
+           "phases_by_rank": [{"elements": 0.1, "sph": 4.4, "halo": 0.2, "migration": 0.3, "output": 7.0},
+                              {"elements": 0.1, "sph": 4.0, "halo": 0.6, "migration": 0.3, "output": 7.0}]}
+    assert run.busy_imbalance(par) == pytest.approx(4.5 / 4.3 - 1)
+    assert run.busy_imbalance({"phases_by_rank": [{"elements": 1.0}]}) == 0.0
+    assert run.busy_imbalance({}) is None
+
+
 def rec(n, step_s, mode="weak"):
     return {"ranks": n, "step_s": step_s, "mode": mode, "size": {"n_tets": n, "n_particles": 0},
             "imbalance": None, "halo_bytes_per_step": None}

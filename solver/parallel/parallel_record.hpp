@@ -7,7 +7,9 @@
 //                        rebuilds a vertex's motion past the contact slack asked for)
 //   contact_slack        the contact band's slack at the end [m] (grows when rebuilds are dear)
 //   imbalance            max / mean - 1 over ranks of the busy time (elements, integration,
-//                        contact) of the last measurement window (rebalance_every steps)
+//                        contact) of the last measurement window (rebalance_every steps): the
+//                        bodies' balancer's measure, without the fluid's passes (phases_by_rank
+//                        has every rank's; scaling/run.py's busy_imbalance counts them)
 //   imbalance_initial    the same over the first window, before any rebalancing
 //   migrated_bytes       bytes sent between ranks by migrations (state, owners, history)
 //   halo_bytes_per_step  bytes sent by all ranks' halo exchanges per force evaluation
