@@ -10,6 +10,7 @@
 #include <type_traits>
 
 #include "core/exec_host.hpp"
+#include "core/select_host.hpp"
 
 namespace qdemsph {
 
@@ -80,21 +81,29 @@ void CommEngine::replan(std::span<const std::int64_t> dest_offsets, std::span<co
   recv_base_ = recv_base;
   n_items_ = static_cast<std::int64_t>(dest_offsets.size()) - 1;
   const std::int64_t n_items = n_items_;
-  // Count sends per rank, then fill send slots by a counting sort (stable: item order).
-  std::vector<std::int64_t> count(size_, 0);
-  for (int r : dest_ranks) {
-    if (r < 0 || r >= size_)
-      throw std::invalid_argument("comm plan: destination rank " + std::to_string(r) +
-                                  " outside [0, " + std::to_string(size_) + ")");
-    ++count[r];
+  // Send slots: the destination entries by rank, each rank's in item order (a stable counting
+  // sort on the threads, select_host.hpp), then each entry's item.
+  const auto n_entries = static_cast<std::int64_t>(dest_ranks.size());
+  if (dest_offsets.empty() || dest_offsets.back() != n_entries)
+    throw std::invalid_argument("comm plan: destination offsets do not end at the entries' count");
+  const Buckets by_rank =
+      bucket_indices(HostExec{}, n_entries, size_, [&](std::int64_t k) { return dest_ranks[k]; });
+  if (by_rank.start[size_] != n_entries) {
+    const int r = *std::find_if(dest_ranks.begin(), dest_ranks.end(),
+                                [&](int d) { return d < 0 || d >= size_; });
+    throw std::invalid_argument("comm plan: destination rank " + std::to_string(r) +
+                                " outside [0, " + std::to_string(size_) + ")");
   }
-  send_off_.assign(size_ + 1, 0);
-  for (int r = 0; r < size_; ++r) send_off_[r + 1] = send_off_[r] + count[r];
-  send_index_.resize(send_off_[size_]);
-  std::vector<std::int64_t> fill(send_off_.begin(), send_off_.end() - 1);
-  for (std::int64_t i = 0; i < n_items; ++i)
-    for (std::int64_t k = dest_offsets[i]; k < dest_offsets[i + 1]; ++k)
-      send_index_[fill[dest_ranks[k]]++] = i;
+  send_off_.assign(by_rank.start.begin(), by_rank.start.end());
+  std::vector<std::int64_t> count(size_);
+  for (int r = 0; r < size_; ++r) count[r] = send_off_[r + 1] - send_off_[r];
+  item_of_.resize(n_entries);
+  for_each(HostExec{}, n_items, [&](std::int64_t i) {
+    for (std::int64_t k = dest_offsets[i]; k < dest_offsets[i + 1]; ++k) item_of_[k] = i;
+  });
+  send_index_.resize(n_entries);
+  for_each(HostExec{}, n_entries,
+           [&](std::int64_t j) { send_index_[j] = item_of_[by_rank.index[j]]; });
   // Receive counts: one all-to-all of counts (O(ranks) memory; a sparse exchange is the
   // next step at large rank counts).
   std::vector<std::int64_t> rcount(size_, 0);

@@ -172,6 +172,7 @@ class CommEngine {
   std::int64_t recv_base_ = 0;
   std::vector<std::int64_t> send_off_, recv_off_;  // per rank, size + 1 entries
   std::vector<std::int64_t> send_index_;
+  std::vector<std::int64_t> item_of_;  // replan()'s work array: each destination entry's item
   std::vector<int> nbrs_;
   StagingBytes sendbuf_, recvbuf_;  // page-locked on a GPU rank (core/memory.hpp)
   std::vector<MPI_Request> reqs_;

@@ -15,6 +15,7 @@
 #include <memory>
 #include <random>
 #include <set>
+#include <string>
 
 #include "core/memory.hpp"
 #include "parallel/cell_tree.hpp"
@@ -209,6 +210,33 @@ TEST(MigratePlan, ReplannedWithIdsAsAField) {
     it = out;
     SCOPED_TRACE(order);
     if (order > 0) check_migrated(it, d);
+  }
+}
+
+TEST(MigratePlan, SendListsKeepItemOrderOnTheThreads) {
+  // Enough items that the send lists are built in a block per thread: each rank's list is
+  // its items in increasing order, as a serial counting sort gives; a destination outside
+  // the ranks is an error that names it (before any message, on every rank alike).
+  const int p = size_of();
+  const std::int64_t n = 200000;
+  std::vector<int> dest(n);
+  std::mt19937 rng(7);
+  for (auto& d : dest) d = static_cast<int>(rng() % static_cast<unsigned>(p));
+  MigratePlan plan(MPI_COMM_WORLD, std::span<const int>{});
+  plan.replan(dest);
+  std::vector<std::int64_t> want;
+  for (int r = 0; r < p; ++r)
+    for (std::int64_t i = 0; i < n; ++i)
+      if (dest[i] == r) want.push_back(i);
+  EXPECT_EQ(plan.engine().send_index(), want);
+  dest[n / 2] = p;
+  try {
+    plan.replan(dest);
+    ADD_FAILURE() << "a destination outside the ranks was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("destination rank " + std::to_string(p)),
+              std::string::npos)
+        << e.what();
   }
 }
 
