@@ -122,7 +122,10 @@ void space_zero(Space s, void* p, std::size_t bytes) {
 void Vec3Buffer::assign(const std::vector<Vec3>& h) {
   const auto n = static_cast<std::int64_t>(h.size());
   const bool host = x_.space() == Space::Host;
-  std::vector<double> c(host ? 0 : n);
+  // A component at a time through host memory kept for the next assign (its pages stay
+  // mapped: a layout rebuild's uploads do not fault them in again).
+  thread_local std::vector<double> c;
+  if (!host) resize_for_overwrite(c, static_cast<std::size_t>(n));
   Buffer<double>* comp[3] = {&x_, &y_, &z_};
   constexpr double Vec3::*member[3] = {&Vec3::x, &Vec3::y, &Vec3::z};
   for (int a = 0; a < 3; ++a) {
@@ -130,7 +133,7 @@ void Vec3Buffer::assign(const std::vector<Vec3>& h) {
     double* out = host ? comp[a]->view().p : c.data();
     const double Vec3::*m = member[a];
     for_each(HostExec{}, n, [&](std::int64_t i) { out[i] = h[i].*m; });
-    if (!host) comp[a]->assign(c);
+    if (!host) comp[a]->assign(c.data(), n);
   }
 }
 

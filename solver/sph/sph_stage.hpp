@@ -561,22 +561,34 @@ class SphStage final : public FluidStage {
     start_.resize(kSphGroups * grid_.count() + 1);
     const std::int64_t n = static_cast<std::int64_t>(q.size());
     // The layout slots in the order of the keys: (key, slot) records sorted by radix (keys are
-    // unique: each is its owner's place for the particle).
+    // unique: each is its owner's place for the particle) on the bits that tell them apart:
+    // the bucket less the rank's smallest, above the place in the bucket in the bits the
+    // largest place needs (~28 bits where the keys have ~49: 4 passes, not 7).
+    const std::uint64_t place = (std::uint64_t{1} << kSphKeyShift) - 1;
+    const auto field = [&](std::int64_t k, bool bucket) {
+      return static_cast<double>(bucket ? q.key[k] >> kSphKeyShift : q.key[k] & place);
+    };
+    const auto b0 = static_cast<std::uint64_t>(-reduce_max(
+        HostExec{}, n, [&](std::int64_t k) { return -field(k, true); }, -0x1p62));
+    const auto b1 = static_cast<std::uint64_t>(reduce_max(
+        HostExec{}, n, [&](std::int64_t k) { return field(k, true); }, 0.0));
+    const int pb = std::bit_width(static_cast<std::uint64_t>(reduce_max(
+        HostExec{}, n, [&](std::int64_t k) { return field(k, false); }, 0.0)));
     resize_for_overwrite(by_key_, n);
-    for_each(HostExec{}, n, [&](std::int64_t k) { by_key_[k] = {q.key[k], k}; });
-    const std::uint64_t top = q.key.empty() ? 0 : *std::max_element(q.key.begin(), q.key.end());
-    radix_sort(by_key_, by_key_scratch_, std::bit_width(top));
+    for_each(HostExec{}, n, [&](std::int64_t k) {
+      by_key_[k] = {((q.key[k] >> kSphKeyShift) - b0) << pb | (q.key[k] & place), k};
+    });
+    radix_sort(by_key_, by_key_scratch_, n > 0 ? std::bit_width((b1 - b0 + 1) << pb) : 0);
     resize_for_overwrite(ord_, n);
     for_each(HostExec{}, n, [&](std::int64_t k) { ord_[k] = by_key_[k].second; });
     // The layout, then each particle i in the order of the keys from layout slot ord[i].
-    set_owned(q.x, q.v, q.rho, q.m, q.type, q.gid, q.key);
+    set_owned(q.x, q.v, q.rho, q.m, q.type, q.gid, q.key, ord_);
     n_own_ = nown;
     x0_.resize(nown);  // the owned positions by slot, before the permutation
     const Vec3CView x = x_.cview();
     const Vec3View x0 = x0_.view();
     for (auto [d, src] : {std::pair{x0.x, x.x}, std::pair{x0.y, x.y}, std::pair{x0.z, x.z}})
       space_copy(d, S, src, S, nown * sizeof(double));
-    slot_.assign(ord_);
     const auto to = slot_.cview();
     permute_state(to);
     permute(key_, tmpu_, to);
@@ -725,11 +737,13 @@ class SphStage final : public FluidStage {
     }
   }
 
-  // The rank's particles (all owned, slot = index); the per-step arrays sized to them.
+  // The rank's particles (all owned; slot: each one's layout slot, empty: its index); the
+  // per-step arrays sized to them.
   void set_owned(const std::vector<Vec3>& x, const std::vector<Vec3>& v,
                  const std::vector<double>& rho, const std::vector<double>& m,
                  const std::vector<std::uint8_t>& type, const std::vector<std::uint64_t>& gid,
-                 const std::vector<std::uint64_t>& key) {
+                 const std::vector<std::uint64_t>& key,
+                 const std::vector<std::int64_t>& slot = {}) {
     n_ = n_own_ = static_cast<std::int64_t>(x.size());
     nf_ = std::count(type.begin(), type.end(), std::uint8_t{kSphFluid});
     nml_ = std::count(type.begin(), type.end(), std::uint8_t{kSphSolid});
@@ -740,9 +754,13 @@ class SphStage final : public FluidStage {
     type_.assign(type);
     gid_.assign(gid);
     key_.assign(key);
-    std::vector<std::int64_t> slot(x.size());
-    std::iota(slot.begin(), slot.end(), std::int64_t{0});
-    slot_.assign(slot);
+    if (slot.empty()) {
+      std::vector<std::int64_t> index(x.size());
+      std::iota(index.begin(), index.end(), std::int64_t{0});
+      slot_.assign(index);
+    } else {
+      slot_.assign(slot);
+    }
     laid_out_ = false;
     a_.resize(n_);
     p_.resize(n_);
