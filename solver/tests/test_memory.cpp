@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <vector>
 
@@ -148,6 +149,28 @@ TEST(Memory, CopyStreamCopiesAreDoneAfterTheWait) {
   cuda_copy_async(b.view().p, a.cview().p, v.size() * sizeof(double));
   cuda_copy_wait();
   EXPECT_EQ(b.to_host(), v);
+}
+
+// Copies between the device and pageable host memory of 4 MiB and more go through two
+// page-locked 8 MiB chunks (memory_cuda.cu): sizes around the threshold and the chunk, and
+// several chunks with a partial last one, arrive whole both ways; a copy from page-locked
+// memory (StagingBytes) takes the direct path and equals them.
+TEST(Memory, LargeHostDeviceCopiesArriveWhole) {
+  if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
+  constexpr std::int64_t kMiB = (1 << 20) / sizeof(double);
+  for (const std::int64_t n : {4 * kMiB - 1, 4 * kMiB, 8 * kMiB + 3, 20 * kMiB + 5}) {
+    std::vector<double> v(static_cast<std::size_t>(n));
+    for (std::int64_t k = 0; k < n; ++k) v[k] = 0.25 * static_cast<double>(k) - 3 * (k % 7);
+    Buffer<double> b(Space::Cuda);
+    b.assign(v);
+    EXPECT_EQ(b.to_host(), v) << n << " doubles";
+    StagingBytes pinned;
+    pinned.resize(v.size() * sizeof(double));
+    b.zero();
+    std::memcpy(pinned.data(), v.data(), pinned.size());
+    b.assign(reinterpret_cast<const double*>(pinned.data()), n);
+    EXPECT_EQ(b.to_host(), v) << n << " doubles from page-locked memory";
+  }
 }
 
 // A scope synchronises before it stops its timer; a launch() scope does not (its device work
