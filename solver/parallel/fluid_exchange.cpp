@@ -3,11 +3,13 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cstring>
 #include <numeric>
 #include <optional>
 #include <utility>
 
 #include "core/exec_host.hpp"
+#include "core/select_host.hpp"
 #include "parallel/balance.hpp"
 #include "parallel/band_cells.hpp"
 #include "parallel/collectives.hpp"
@@ -32,6 +34,19 @@ void resize_for_overwrite(FluidParticles& p, std::int64_t n) {
   const auto k = static_cast<std::size_t>(n);
   auto each = [&](auto&... v) { (resize_for_overwrite(v, k), ...); };
   each(p.x, p.v, p.rho, p.m, p.type, p.gid, p.key);
+}
+
+// dst item to(k) <- src item from(k) of every field, for k in [0, n), on the threads.
+template <class From, class To>
+void copy_items(const std::vector<CommField>& src, const std::vector<CommField>& dst,
+                std::int64_t n, From from, To to) {
+  for (std::size_t j = 0; j < src.size(); ++j) {
+    const std::size_t e = src[j].elem;
+    std::byte* const d = dst[j].data;
+    const std::byte* const sp = src[j].data;
+    for_each(HostExec{}, n,
+             [&](std::int64_t k) { std::memcpy(d + to(k) * e, sp + from(k) * e, e); });
+  }
 }
 
 // The fields at n items, the first ones kept.
@@ -90,19 +105,40 @@ class MpiFluidExchange final : public FluidExchange {
     }
     rebalance_ = false;
 
-    // Owned particles to the owners of their positions, into o_ (its storage reused).
+    // Owned particles to the owners of their positions, in place (a rank keeps nearly all of
+    // them): those that leave are gathered and sent, the holes they leave are filled from the
+    // end, and those that arrive are appended (the owned particles' order is free: the stage
+    // lays them out by key).
     resize_for_overwrite(dest_, n);
     for_each(HostExec{}, n,
              [&](std::int64_t i) { dest_[i] = owner_of_key(dec_.splitters, curve_key_[i]); });
     part.emplace(timers, "sph.rebuild.migrate");
-    migrate_->replan(dest_);
-    resize_for_overwrite(o_, migrate_->n_new());
-    migrate_->move(fields_of(p), fields_of(o_));
+    leave_ = select_indices(HostExec{}, n, [&](std::int64_t i) { return dest_[i] != me_; });
+    const auto nl = static_cast<std::int64_t>(leave_.size()), nk = n - nl;
+    resize_for_overwrite(out_, nl);
+    resize_for_overwrite(out_dest_, static_cast<std::size_t>(nl));
+    for_each(HostExec{}, nl, [&](std::int64_t k) { out_dest_[k] = dest_[leave_[k]]; });
+    copy_items(
+        fields_of(p), fields_of(out_), nl, [&](std::int64_t k) { return leave_[k]; },
+        [](std::int64_t k) { return k; });
+    migrate_->replan(out_dest_);
+    resize_for_overwrite(in_, migrate_->n_new());
+    migrate_->move(fields_of(out_), fields_of(in_));
     migrated_bytes_ += migrate_->engine().last_bytes();
-    const std::int64_t nown = migrate_->n_new();
+    // The holes below nk (leave_ is increasing), each filled by a kept particle at or above it.
+    const auto nh = std::lower_bound(leave_.begin(), leave_.end(), nk) - leave_.begin();
+    fill_ = select_indices(HostExec{}, nl, [&](std::int64_t j) { return dest_[nk + j] == me_; });
+    copy_items(
+        fields_of(p), fields_of(p), nh, [&](std::int64_t j) { return nk + fill_[j]; },
+        [&](std::int64_t j) { return leave_[j]; });
+    const std::int64_t nown = nk + migrate_->n_new();
+    resize(p, nown);
+    copy_items(
+        fields_of(in_), fields_of(p), nown - nk, [](std::int64_t k) { return k; },
+        [&](std::int64_t k) { return nk + k; });
 
     part.emplace(timers, "sph.rebuild.ghosts");
-    find_ghost_ranks(nown);
+    find_ghost_ranks(p.x, nown);
     part.emplace(timers, "sph.rebuild.halo");
     if (halo_) {  // ids go as a field
       halo_->replan(nown, g_.off, g_.ranks);
@@ -110,14 +146,13 @@ class MpiFluidExchange final : public FluidExchange {
       halo_ = std::make_unique<HaloPlan>(comm_, nown, g_.off, g_.ranks);
       halo_->engine().use_device(space_ == Space::Cuda, 6 * sizeof(double));
     }
-    resize(o_, halo_->n_total());
-    const auto f = fields_of(o_);
+    resize(p, halo_->n_total());
+    const auto f = fields_of(p);
     halo_->gather_begin(f);
     halo_->gather_finish(f);
     halo_bytes_ += halo_->engine().last_bytes();
     part.reset();
-    o_.cost.clear();
-    std::swap(p, o_);  // o_ keeps the caller's storage for the next distribute()
+    p.cost.clear();
     // This part of the rebuild, until the stage's part is measured too (time_step).
     rebuild_s_ = std::max(rebuild_s_, MPI_Wtime() - t0);
     return nown;
@@ -210,7 +245,7 @@ class MpiFluidExchange final : public FluidExchange {
   // and looked up. The particles are split into as many contiguous blocks as threads, each
   // with its own table of the distinct cells of its particles (a cell at a block's edge is in
   // two tables, and tested twice), so all but the publication runs in parallel.
-  void find_ghost_ranks(std::int64_t nown) {
+  void find_ghost_ranks(const std::vector<Vec3>& x, std::int64_t nown) {
     GhostScratch& g = g_;
     const std::int64_t nb = nown >= kMinParallel ? omp_get_max_threads() : 1;
     const auto lo = [&](std::int64_t b) { return nown * b / nb; };
@@ -228,7 +263,7 @@ class MpiFluidExchange final : public FluidExchange {
       w.in_piece_value.clear();
       std::uint64_t last = 0;
       for (std::int64_t i = lo(b); i < lo(b + 1); ++i) {
-        const std::uint64_t k = cell_key(o_.x[i]);
+        const std::uint64_t k = cell_key(x[i]);
         if (i > lo(b) && k == last) {
           g.cell_of[i] = g.cell_of[i - 1];
           continue;
@@ -427,7 +462,10 @@ class MpiFluidExchange final : public FluidExchange {
   std::vector<double> cost_;              // per particle: its cost before any is measured
   std::vector<std::uint64_t> curve_key_;  // per particle: its key on dec_.grid
   std::vector<int> dest_;                 // per particle: its new owner
-  FluidParticles o_;  // the new layout being built (between calls: the last input)
+  std::vector<std::int64_t> leave_;       // the particles that change owner, increasing
+  std::vector<std::int64_t> fill_;        // the kept particles above the kept count (- it)
+  std::vector<int> out_dest_;             // per leaving particle: its new owner
+  FluidParticles out_, in_;               // the particles that leave, and those that arrive
   GhostScratch g_;
 };
 
