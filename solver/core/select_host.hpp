@@ -2,7 +2,8 @@
 // [0, K) (keys outside are dropped), and its one-key case select_indices. Two passes over as
 // many contiguous blocks as threads (count per block and key, then write at each block's
 // offset), so the result does not depend on the thread count; key(i) is called twice per index.
-// For host orchestration code (a distributed rank's layout), not for files nvcc compiles.
+// For host orchestration code (a distributed rank's layout; a GPU stage's too, in its host
+// code).
 #pragma once
 
 #include <omp.h>

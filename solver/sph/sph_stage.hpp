@@ -36,6 +36,7 @@
 #include "core/error_flag.hpp"
 #include "core/memory.hpp"
 #include "core/radix_sort.hpp"
+#include "core/select_host.hpp"
 #include "core/timers.hpp"
 #include "neighbor/cell_grid.hpp"
 #include "physics/sph_boundary.hpp"
@@ -700,9 +701,8 @@ class SphStage final : public FluidStage {
   // pick_ = the owned particles (slot < n_own_), in local order.
   void pick_owned() {
     const std::int64_t* slot = host_readable(slot_.cview().p, n_, 0);
-    pick_.clear();
-    for (std::int64_t i = 0; i < n_; ++i)
-      if (slot[i] < n_own_) pick_.push_back(i);
+    const std::int64_t nown = n_own_;
+    pick_ = select_indices(HostExec{}, n_, [&](std::int64_t i) { return slot[i] < nown; });
   }
   // out = the owned particles' entries (pick_) of a local array: read in place on the host,
   // through one host copy from a device.
