@@ -463,7 +463,7 @@ class MpiFluidExchange final : public FluidExchange {
   std::vector<std::uint64_t> curve_key_;  // per particle: its key on dec_.grid
   std::vector<int> dest_;                 // per particle: its new owner
   std::vector<std::int64_t> leave_;       // the particles that change owner, increasing
-  std::vector<std::int64_t> fill_;        // the kept particles above the kept count (- it)
+  std::vector<std::int64_t> fill_;        // the kept particles from the kept count on, less it
   std::vector<int> out_dest_;             // per leaving particle: its new owner
   FluidParticles out_, in_;               // the particles that leave, and those that arrive
   GhostScratch g_;
