@@ -26,29 +26,6 @@ void check_fields(std::span<const CommField> f, std::int64_t min_items, const ch
                                   " items, needs " + std::to_string(min_items));
 }
 
-// dst(k) <- src(k), elements of `elem` bytes, for k in [first, last), on the host's threads:
-// the items' copies into and out of the message buffers are independent. The common sizes (a
-// byte, a double or id, a Vec3) are copies of a constant size, not a call to memcpy each.
-template <class D, class S>
-void copy_each(std::int64_t first, std::int64_t last, std::size_t elem, D dst, S src) {
-  auto copy = [&](auto bytes) {
-    for_each(HostExec{}, last - first, [&](std::int64_t i) {
-      const std::int64_t k = first + i;
-      std::memcpy(dst(k), src(k), bytes);
-    });
-  };
-  switch (elem) {
-    case 1:
-      return copy(std::integral_constant<std::size_t, 1>{});
-    case 8:
-      return copy(std::integral_constant<std::size_t, 8>{});
-    case 24:
-      return copy(std::integral_constant<std::size_t, 24>{});
-    default:
-      return copy(elem);
-  }
-}
-
 // f(first, last) over the slots [0, n) of a message buffer, less this rank's own [b, e) unless
 // `self`.
 template <class F>

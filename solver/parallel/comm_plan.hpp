@@ -41,6 +41,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "core/exec_host.hpp"
 #include "core/memory.hpp"
 
 namespace qdemsph {
@@ -70,6 +71,30 @@ constexpr auto comm_add_fn() {
     return static_cast<void (*)(std::byte*, const std::byte*)>(nullptr);
 }
 }  // namespace detail
+
+// dst(k) <- src(k), elements of `elem` bytes, for k in [first, last), on the host's threads
+// (independent copies: items into and out of message buffers, a layout's items). The common
+// sizes (a byte, a double or id, a Vec3) are copies of a constant size, not a call to memcpy
+// each.
+template <class D, class S>
+void copy_each(std::int64_t first, std::int64_t last, std::size_t elem, D dst, S src) {
+  auto copy = [&](auto bytes) {
+    for_each(HostExec{}, last - first, [&](std::int64_t i) {
+      const std::int64_t k = first + i;
+      std::memcpy(dst(k), src(k), bytes);
+    });
+  };
+  switch (elem) {
+    case 1:
+      return copy(std::integral_constant<std::size_t, 1>{});
+    case 8:
+      return copy(std::integral_constant<std::size_t, 8>{});
+    case 24:
+      return copy(std::integral_constant<std::size_t, 24>{});
+    default:
+      return copy(elem);
+  }
+}
 
 template <class T>
 CommField comm_field(T* p, std::int64_t n) {

@@ -3,7 +3,6 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <cstring>
 #include <numeric>
 #include <optional>
 #include <utility>
@@ -36,16 +35,15 @@ void resize_for_overwrite(FluidParticles& p, std::int64_t n) {
   each(p.x, p.v, p.rho, p.m, p.type, p.gid, p.key);
 }
 
-// dst item to(k) <- src item from(k) of every field, for k in [0, n), on the threads.
+// dst item to(k) <- src item from(k) of every field, for k in [0, n) (copy_each).
 template <class From, class To>
 void copy_items(const std::vector<CommField>& src, const std::vector<CommField>& dst,
                 std::int64_t n, From from, To to) {
   for (std::size_t j = 0; j < src.size(); ++j) {
     const std::size_t e = src[j].elem;
-    std::byte* const d = dst[j].data;
-    const std::byte* const sp = src[j].data;
-    for_each(HostExec{}, n,
-             [&](std::int64_t k) { std::memcpy(d + to(k) * e, sp + from(k) * e, e); });
+    copy_each(
+        0, n, e, [&](std::int64_t k) { return dst[j].data + to(k) * e; },
+        [&](std::int64_t k) { return src[j].data + from(k) * e; });
   }
 }
 
