@@ -1,6 +1,6 @@
 // When a distributed layout's upkeep pays (docs/parallel.md items 4 and 8): a rank's ghost or
-// layout rebuild runs on the host (on a GPU rank of two H200s ~0.15 s for 786 k tets, ~0.1 s for
-// 1.1 M SPH particles, against millisecond steps), so the margins that decide how often one
+// layout rebuild runs on the host (on a GPU rank of two H200s ~0.13 s for 786 k tets, ~0.08 s
+// for 1.1 M SPH particles, against millisecond steps), so the margins that decide how often one
 // happens, and whether a re-cut is worth one, weigh the measured rebuild time. Pure functions, no
 // MPI: the callers pass values that are the same on every rank (reduced), so every rank decides
 // alike.
