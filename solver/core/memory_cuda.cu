@@ -127,18 +127,20 @@ namespace {
 constexpr std::size_t kBounceMin = std::size_t{4} << 20, kBounceChunk = std::size_t{8} << 20;
 
 struct Bounce {
-  std::mutex busy;  // one copy at a time through the chunks
+  std::mutex busy;        // one copy at a time through the chunks
+  StagingBytes chunk[2];  // page-locked: this process uses the GPU (staging_alloc)
   std::byte* buf[2] = {nullptr, nullptr};
   cudaEvent_t done[2] = {nullptr, nullptr};
   Bounce() {
     for (int i = 0; i < 2; ++i) {
-      QDEMSPH_CUDA_CHECK(cudaMallocHost(&buf[i], kBounceChunk), "cudaMallocHost (bounce)");
+      chunk[i].resize(kBounceChunk);
+      buf[i] = chunk[i].data();
       QDEMSPH_CUDA_CHECK(cudaEventCreateWithFlags(&done[i], cudaEventDisableTiming),
                          "cudaEventCreate (bounce)");
     }
   }
   ~Bounce() {  // errors at teardown (driver already unloaded) are ignored
-    for (int i = 0; i < 2; ++i) cudaFreeHost(buf[i]), cudaEventDestroy(done[i]);
+    for (int i = 0; i < 2; ++i) cudaEventDestroy(done[i]);
   }
 };
 Bounce& bounce() {
