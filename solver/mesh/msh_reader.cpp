@@ -133,6 +133,7 @@ class Cursor {
 };
 
 struct Reader {
+  explicit Reader(Cursor cursor) : c(std::move(cursor)) {}
   Cursor c;
   bool binary = false;
   bool v4 = false;
@@ -374,7 +375,7 @@ struct Reader {
 }  // namespace
 
 MshData parse_msh(std::string_view bytes, const std::string& source) {
-  Reader r{Cursor(bytes, source)};
+  Reader r(Cursor(bytes, source));
   r.file();
   return std::move(r.out);
 }
