@@ -328,8 +328,13 @@ class ContactStage {
       for_each(HostExec{}, nv, [&](std::int64_t i) { g[i] = ids ? m.gid[i] : i; });
     });
     inv_mass_.assign(m.inv_mass);
-    ghosts_ = false;  // free vertices other ranks own (a distributed run's rank)
-    for (std::int64_t i = nfv_; i < nv_; ++i) ghosts_ = ghosts_ || !c.body_fixed[m.body[i]];
+    ghosts_ = false;      // free vertices other ranks own (a distributed run's rank)
+    fixed_held_ = false;  // fixed bodies' vertices (their point-face hits: keep_evaluated)
+    for (std::int64_t i = nfv_; i < nv_; ++i) {
+      const bool fixed = c.body_fixed[m.body[i]];
+      ghosts_ = ghosts_ || !fixed;
+      fixed_held_ = fixed_held_ || fixed;
+    }
     pc_.resize(np_);
     pr_.resize(np_);
     pc_ref_.resize(np_);
@@ -787,7 +792,11 @@ class ContactStage {
             if (rec[o].body2 == r.body2 && rec[o].d > r.d) keep = false;
           r.active = keep ? 1 : 0;
         });
-    return ghosts_ ? keep_evaluated(nc) : nc;
+    // Only a fixed vertex's point-face records can be another rank's (a free vertex's are tested
+    // on its owner, an edge pair's on its anchor's, wall vertices are owned ones): without fixed
+    // vertices there is nothing to drop (cube block, 2 ranks: 25 us of kernels and a read-back
+    // a step on an H100).
+    return ghosts_ && fixed_held_ ? keep_evaluated(nc) : nc;
   }
 
   void forces(Vec3CView v, double dt, std::int64_t nc) {
@@ -1054,7 +1063,7 @@ class ContactStage {
   std::int64_t nv_ = 0, nfv_ = 0, ntri_ = 0, ne_ = 0, np_ = 0, npf_ = 0, nwv_ = 0, nw_ = 0,
                n_prev_ = 0;
   double d_dem_ = 0, kn_factor_ = 0.1, kt_ratio_ = 2.0 / 7.0;
-  bool self_ = false, ghosts_ = false;
+  bool self_ = false, ghosts_ = false, fixed_held_ = false;
   int nm_ = 0;
   Vec3Buffer tri_n_{S};
   Buffer<std::int32_t> edge_tri_{S};

@@ -94,9 +94,9 @@ __global__ void __launch_bounds__(kBlock)
   if (threadIdx.x == 0) *out = r;
 }
 
+// Queues the two levels; the result lands in the device slot returned (n > 0).
 template <class F, class Op>
-double reduce(std::int64_t n, F f, Op op, double init) {
-  if (n <= 0) return init;
+const double* reduce_queue(std::int64_t n, F f, Op op, double init) {
   const std::int64_t want = (n + kBlock - 1) / kBlock;
   const int blocks = static_cast<int>(want < kMaxPartials ? want : kMaxPartials);
   double* scratch = cuda_reduce_scratch();
@@ -104,8 +104,15 @@ double reduce(std::int64_t n, F f, Op op, double init) {
   QDEMSPH_CUDA_CHECK(cudaGetLastError(), "reduce_kernel launch");
   reduce_finish_kernel<<<1, kBlock>>>(blocks, op, init, scratch, scratch + kMaxPartials);
   QDEMSPH_CUDA_CHECK(cudaGetLastError(), "reduce_finish_kernel launch");
+  return scratch + kMaxPartials;
+}
+
+template <class F, class Op>
+double reduce(std::int64_t n, F f, Op op, double init) {
+  if (n <= 0) return init;
+  const double* r = reduce_queue(n, f, op, init);
   double h = init;
-  QDEMSPH_CUDA_CHECK(cudaMemcpy(&h, scratch + kMaxPartials, sizeof(double), cudaMemcpyDeviceToHost),
+  QDEMSPH_CUDA_CHECK(cudaMemcpy(&h, r, sizeof(double), cudaMemcpyDeviceToHost),
                      "reduction result copy (an earlier kernel may have faulted)");
   return h;
 }
@@ -130,6 +137,20 @@ double reduce_sum(CudaExec, std::int64_t n, F f) {
 template <class F>
 double reduce_max(CudaExec, std::int64_t n, F f, double init) {
   return cuda_detail::reduce(n, f, cuda_detail::MaxOp{}, init);
+}
+
+// reduce_max queued: the result is copied to *out (host memory; page-locked for the copy to
+// be asynchronous) after the work queued before it, without waiting. A DeviceMark recorded
+// next says when it is there.
+template <class F>
+void reduce_max_to(CudaExec, std::int64_t n, F f, double init, double* out) {
+  if (n <= 0) {
+    *out = init;
+    return;
+  }
+  const double* r = cuda_detail::reduce_queue(n, f, cuda_detail::MaxOp{}, init);
+  QDEMSPH_CUDA_CHECK(cudaMemcpyAsync(out, r, sizeof(double), cudaMemcpyDeviceToHost),
+                     "reduction result copy");
 }
 
 inline void exec_sync(CudaExec) {

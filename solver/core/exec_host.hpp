@@ -44,6 +44,12 @@ double reduce_max(HostExec, std::int64_t n, F f, double init) {
   return m;
 }
 
+// reduce_max queued (exec_cuda.cuh): on the host done at once.
+template <class F>
+void reduce_max_to(HostExec, std::int64_t n, F f, double init, double* out) {
+  *out = reduce_max(HostExec{}, n, f, init);
+}
+
 }  // namespace qdemsph
 
 namespace qdemsph {

@@ -27,6 +27,9 @@ bool cuda_available() { return false; }
 void cuda_sync() {}
 void cuda_copy_async(void*, const void*, std::size_t) { no_cuda(); }
 void cuda_copy_wait() {}
+DeviceMark::~DeviceMark() = default;
+void DeviceMark::record() { no_cuda(); }
+void DeviceMark::wait() {}
 CudaIpcHandle cuda_ipc_handle(void*) { no_cuda(); }
 void* cuda_ipc_open(const CudaIpcHandle&) { no_cuda(); }
 void cuda_ipc_close(void*) noexcept {}

@@ -41,6 +41,22 @@ void cuda_sync();
 // peer copies overlap the interior work. cuda_copy_wait returns when those copies are done.
 void cuda_copy_async(void* dst, const void* src, std::size_t bytes);
 void cuda_copy_wait();
+// A point in this process's default-stream work (a CUDA event): record() after the work queued
+// so far, wait() returns once that work is done while work queued later runs on. wait() before
+// any record() returns at once. Only for device work: record() makes the process's GPU context.
+class DeviceMark {
+ public:
+  DeviceMark() = default;
+  ~DeviceMark();
+  DeviceMark(const DeviceMark&) = delete;
+  DeviceMark& operator=(const DeviceMark&) = delete;
+  void record();
+  void wait();
+
+ private:
+  void* event_ = nullptr;
+  bool pending_ = false;
+};
 // CUDA IPC between processes of one node: the handle of a device allocation of this process
 // (a pointer cuda_alloc returned), and another process's allocation mapped into this one by
 // its handle (a device pointer here; peer copies from it go over NVLink where there is one).

@@ -240,6 +240,28 @@ void cuda_copy_wait() {
   QDEMSPH_CUDA_CHECK(cudaStreamSynchronize(copy_stream()), "cudaStreamSynchronize");
 }
 
+DeviceMark::~DeviceMark() {
+  if (event_) cudaEventDestroy(static_cast<cudaEvent_t>(event_));
+}
+
+void DeviceMark::record() {
+  if (!event_) {
+    use_preferred_device();
+    cudaEvent_t e = nullptr;
+    QDEMSPH_CUDA_CHECK(cudaEventCreateWithFlags(&e, cudaEventDisableTiming), "cudaEventCreate");
+    event_ = e;
+  }
+  QDEMSPH_CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(event_)), "cudaEventRecord");
+  pending_ = true;
+}
+
+void DeviceMark::wait() {
+  if (!pending_) return;
+  pending_ = false;
+  QDEMSPH_CUDA_CHECK(cudaEventSynchronize(static_cast<cudaEvent_t>(event_)),
+                     "cudaEventSynchronize (an earlier kernel may have faulted)");
+}
+
 static_assert(sizeof(cudaIpcMemHandle_t) == sizeof(CudaIpcHandle));
 
 CudaIpcHandle cuda_ipc_handle(void* p) {

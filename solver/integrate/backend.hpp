@@ -128,8 +128,13 @@ class Backend {
   // loads, damping and the contact evaluation, then the contact forces, so that a halo
   // exchange can overlap the tets whose vertices are all owned and the contact force shares
   // of other ranks' vertices (contact_shares(), contact_stage.hpp) can reach their owners,
-  // whose add_contact_forces merges them in the one-rank order.
-  virtual void element_forces(std::int64_t t0, std::int64_t t1, double dt_dissipation) = 0;
+  // whose add_contact_forces merges them in the one-rank order. `undoable`: the tets'
+  // dissipated energy before this evaluation is kept, and undo_dissipation() restores it (a
+  // distributed rank queues its interior tets before the ranks agree that the layout stays;
+  // a rebuild then discards that evaluation).
+  virtual void element_forces(std::int64_t t0, std::int64_t t1, double dt_dissipation,
+                              bool undoable) = 0;
+  virtual void undo_dissipation() = 0;
   virtual void assemble_forces(double dt_dissipation, double mass_damping) = 0;
   virtual std::vector<ContactShare> contact_shares() = 0;
   virtual void add_contact_forces(const std::vector<ContactShare>& in) = 0;
@@ -146,8 +151,11 @@ class Backend {
   virtual Space space() const = 0;
   // max |x_i - x_i at the last mark_positions()| over the free vertices (how far owned
   // vertices moved since the decomposition was rebuilt). The reference is allocated on the
-  // first mark, so a run that never marks pays nothing.
+  // first mark, so a run that never marks pays nothing. queue_max_moved() queues it (on a GPU
+  // without waiting: the halo's packing and the interior tets can be queued behind it);
+  // max_moved() waits for the value queued last.
   virtual void mark_positions() = 0;
+  virtual void queue_max_moved() = 0;
   virtual double max_moved() = 0;
   // Enables the fluid coupling force fc (zero until the fluid writes it); views stay valid
   // until the next upload.

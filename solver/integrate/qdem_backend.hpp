@@ -119,12 +119,16 @@ class QdemBackend final : public Backend {
   void use_preload(bool on) override { preload_ = on; }
 
   void compute_forces(double dt_diss, double alpha) override {
-    element_forces(0, nft_, dt_diss);
+    element_forces(0, nft_, dt_diss, false);
     assemble_forces(dt_diss, alpha);
     add_contact_forces({});
   }
 
-  void element_forces(std::int64_t t0, std::int64_t t1, double dt_diss) override {
+  void element_forces(std::int64_t t0, std::int64_t t1, double dt_diss, bool undoable) override {
+    const bool keep = undoable && dt_diss > 0;
+    undo_ = keep ? std::pair{t0, t1} : std::pair<std::int64_t, std::int64_t>{0, 0};
+    if (keep && diss_undo_.size() < nt_) diss_undo_.resize(nt_);
+    const auto undo = diss_undo_.view();
     const std::int64_t nt = nt_;
     const auto x = x_.cview(), v = v_.cview();
     const auto tv = tv_.cview();
@@ -150,8 +154,20 @@ class QdemBackend final : public Backend {
           const ElementForces e = tet_forces(mats[tmat[t]], xs, vs, Xi, vol0[t]);
           if (!(det(e.F) > 0)) raise_flag(flag, t);
           for (int k = 0; k < 4; ++k) tf[k * nt + t] = e.f[k];
-          if (dt_diss > 0) diss_t[t] += dt_diss * vol0[t] * e.stress.dissipation;
+          if (dt_diss > 0) {
+            if (keep) undo[t] = diss_t[t];
+            diss_t[t] += dt_diss * vol0[t] * e.stress.dissipation;
+          }
         });
+  }
+
+  void undo_dissipation() override {
+    const auto [t0, t1] = undo_;
+    const auto undo = diss_undo_.cview();
+    const auto diss_t = diss_t_.view();
+    for_each(
+        Exec{}, t1 - t0, QDEMSPH_LAMBDA(std::int64_t j) { diss_t[t0 + j] = undo[t0 + j]; });
+    undo_ = {0, 0};
   }
 
   void assemble_forces(double dt_diss, double alpha) override {
@@ -532,11 +548,21 @@ class QdemBackend final : public Backend {
         Exec{}, nv_, QDEMSPH_LAMBDA(std::int64_t i) { xm.set(i, x[i]); });
   }
 
-  double max_moved() override {
-    if (xmark_.size() != nv_) return 0;
+  void queue_max_moved() override {
+    moved_.resize(sizeof(double));  // page-locked on a GPU rank: the copy does not wait
+    double* out = reinterpret_cast<double*>(moved_.data());
+    if (xmark_.size() != nv_) {
+      *out = 0;
+      return;
+    }
     const auto x = x_.cview(), xm = xmark_.cview();
-    return reduce_max(
-        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return norm(x[i] - xm[i]); }, 0.0);
+    reduce_max_to(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return norm(x[i] - xm[i]); }, 0.0, out);
+    if constexpr (S == Space::Cuda) moved_mark_.record();
+  }
+  double max_moved() override {
+    moved_mark_.wait();
+    return moved_.size() == sizeof(double) ? *reinterpret_cast<const double*>(moved_.data()) : 0;
   }
 
   std::size_t device_bytes() const override {
@@ -564,11 +590,16 @@ class QdemBackend final : public Backend {
   std::vector<std::int64_t> csr_off_h_;  // the corner lists' offsets as built on the host
   StagingBytes stage_;                   // host side of the uploads (write_on_host)
   Buffer<unsigned long long> flag_{S};
-  // Distributed runs only (empty otherwise): halo send list and staging, moved-reference.
+  // Distributed runs only (empty otherwise): halo send list and staging, moved-reference and
+  // the queued max_moved (its host slot and, on a GPU, the point after its copy).
   Buffer<std::int64_t> halo_send_{S};
   Buffer<double> halo_buf_{S};
   std::int64_t halo_base_ = 0, halo_nrecv_ = 0;
   Vec3Buffer xmark_{S};
+  Buffer<double> diss_undo_{S};  // dissipated energy before an undoable element_forces
+  std::pair<std::int64_t, std::int64_t> undo_{0, 0};  // its tets
+  StagingBytes moved_;
+  DeviceMark moved_mark_;
   std::unique_ptr<ContactStage<Exec>> contact_;  // null when the model needs no contact
 };
 

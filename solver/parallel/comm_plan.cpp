@@ -208,8 +208,19 @@ void CommEngine::remap_device() {
   if (!all_ranks(map_peers())) drop_device();
 }
 
+void CommEngine::mark_packed() {
+  if (!device_) return;
+  packed_.record();
+  marked_ = true;
+}
+
 void CommEngine::post_device() {
-  cuda_sync();  // the caller's records are in dsend_ before any receiver copies them
+  // The caller's records are in dsend_ before any receiver copies them.
+  if (marked_)
+    packed_.wait();
+  else
+    cuda_sync();
+  marked_ = false;
   reqs_.clear();
   ready_.clear();
   last_bytes_ = 0;

@@ -155,16 +155,20 @@ class CommEngine {
   // each sender's records straight out of the sender's device buffer, mapped by CUDA IPC
   // (over NVLink between the GPUs of an H100 host: 1 MB in 10 us against ~150 us through
   // host memory and MPI, scaling/probes/devicecomm.cu). Two empty messages per neighbour
-  // order the copies: "packed" (begin_packed synchronises the device first, so the records
-  // are there) and "copied" (finish_packed returns once every receiver has its copy, so the
-  // buffer may be packed again). The copies run on the copy stream (cuda_copy_async): kernels
-  // queued between begin_packed and finish_packed (the interior tets) go on meanwhile, and the
-  // records are in finish_packed's buffer for every kernel queued after it. Collective; true only
-  // when every rank asks (`want`), every neighbour is on this node and QDEMSPH_DEVICE_HALO is not
-  // 0; otherwise records are staged through host memory as before. Records of at most max_stride
-  // bytes.
+  // order the copies: "packed" (begin_packed first waits for the device, or for its work up to
+  // mark_packed(), so the records are there) and "copied" (finish_packed returns once every
+  // receiver has its copy, so the buffer may be packed again). The copies run on the copy stream
+  // (cuda_copy_async): kernels queued between begin_packed and finish_packed (the interior tets) go
+  // on meanwhile, and the records are in finish_packed's buffer for every kernel queued after it.
+  // Collective; true only when every rank asks (`want`), every neighbour is on this node and
+  // QDEMSPH_DEVICE_HALO is not 0; otherwise records are staged through host memory as before.
+  // Records of at most max_stride bytes.
   bool use_device(bool want, std::size_t max_stride);
   Space packed_space() const { return device_ ? Space::Cuda : Space::Host; }
+  // Device-resident mode, after the pack is queued: begin_packed then waits for the device work
+  // queued up to this point only (a DeviceMark), not for kernels queued between the two (the
+  // interior tets, which so run while the exchange is posted). No-op in host mode.
+  void mark_packed();
 
   // Variable-length exchange with the neighbours() (blocking; none in flight): records of
   // `stride` bytes in `send`, grouped by destination rank by send_off (size() + 1 entries);
@@ -203,7 +207,8 @@ class CommEngine {
   std::vector<MPI_Request> reqs_;
   // Device-resident mode (use_device): this rank's device buffers, and per rank the mapped
   // send buffer of a neighbour that sends here, with the item where this rank's records start.
-  bool device_ = false;
+  bool device_ = false, marked_ = false;  // marked_: mark_packed() since the last post
+  DeviceMark packed_;
   std::size_t max_stride_ = 0;
   Buffer<std::byte> dsend_{Space::Cuda}, drecv_{Space::Cuda};
   std::vector<std::byte*> peer_;

@@ -172,29 +172,26 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   }
 
   void compute_forces(double dt_diss, double alpha) override {
-    if (dt_diss > 0) {
+    const bool dynamic = dt_diss > 0;
+    if (dynamic) {
       relaxing_ = false;
       ++steps_;
     }
-    maybe_rebuild(dt_diss > 0);
     // The phases count dynamic steps, as the Stepper's and the contact stage's do: the first
     // evaluation (the Stepper's set-up) and relaxation sweeps (dt_diss = 0) are not steps.
     PhaseTimers untimed;
-    PhaseTimers& tm = dt_diss > 0 ? timers_ : untimed;
+    PhaseTimers& tm = dynamic ? timers_ : untimed;
+    // The skin test's reduction, the halo's packing and the interior tets are queued before the
+    // ranks agree on the test: on a GPU they run meanwhile. A rebuild finishes the exchange and
+    // starts again on the new layout (the interior tets queued so far are computed again).
+    if (contact_) {
+      auto s = timers_.launch("halo");
+      auto s1 = timers_.launch("halo.skin");
+      local_->queue_max_moved();
+    }
+    start_halo(tm, dt_diss);
+    if (maybe_rebuild(dynamic)) start_halo(tm, dt_diss);
     CommEngine& e = halo_->engine();
-    {
-      auto s = tm.scope("halo");
-      auto s1 = tm.scope("halo.xv");
-      auto buf = e.packed_send_buffer(6 * sizeof(double));
-      local_->pack_halo(reinterpret_cast<double*>(buf.data()), e.packed_space());
-      e.begin_packed();
-    }
-    // On a GPU the interior tets run while the halo's records are copied (on the copy stream)
-    // and unpacked; their time counts in "elements" at the synchronisation below.
-    {
-      auto s = tm.launch("elements");
-      local_->element_forces(0, L_.n_interior, dt_diss);
-    }
     {
       auto s = tm.launch("halo");
       auto s1 = tm.launch("halo.xv");
@@ -205,7 +202,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     std::vector<ContactShare> out;
     {
       auto s = tm.scope("elements");
-      local_->element_forces(L_.n_interior, static_cast<std::int64_t>(L_.tets.size()), dt_diss);
+      local_->element_forces(L_.n_interior, static_cast<std::int64_t>(L_.tets.size()), dt_diss,
+                             false);
       local_->sync();  // the tets' device time counts here, not in the contact stage's phases
       local_->assemble_forces(dt_diss, alpha);
       auto s1 = tm.scope("elements.shares");
@@ -397,9 +395,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   }
 
   // Stages of a rank's own backend, not of the decorator.
-  void element_forces(std::int64_t, std::int64_t, double) override {
+  void element_forces(std::int64_t, std::int64_t, double, bool) override {
     unsupported("element_forces");
   }
+  void undo_dissipation() override { unsupported("undo_dissipation"); }
   void assemble_forces(double, double) override { unsupported("assemble_forces"); }
   std::vector<ContactShare> contact_shares() override { unsupported("contact_shares"); }
   void add_contact_forces(const std::vector<ContactShare>&) override {
@@ -412,6 +411,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   void unpack_halo(const double*, Space) override { unsupported("unpack_halo"); }
   Space space() const override { return local_->space(); }
   void mark_positions() override { unsupported("mark_positions"); }
+  void queue_max_moved() override { unsupported("queue_max_moved"); }
   double max_moved() override { unsupported("max_moved"); }
 
   // ---- fluid coupling (sph/solid_coupling.hpp) ---------------------------------------------
@@ -813,13 +813,42 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     fixed_vm_ = h.von_mises;
   }
 
-  // Rebuild when some vertex moved `slack` (contact band) or, every rebalance_every steps,
-  // when the measured imbalance exceeds the threshold.
-  void maybe_rebuild(bool dynamic) {
+  // Packs the ghosts' x, v and starts their exchange, and queues the interior tets (their
+  // vertices are all owned): on a GPU they run while the records are copied (on the copy
+  // stream) and unpacked; their time counts in "elements" at the synchronisation after the
+  // halo. Records staged through the host are posted before the interior tets, so that the
+  // messages travel meanwhile; device-resident ones after, begin_packed waiting for the pack
+  // only (mark_packed).
+  void start_halo(PhaseTimers& tm, double dt_diss) {
+    CommEngine& e = halo_->engine();
+    const bool device = e.packed_space() == Space::Cuda;
+    {
+      auto s = tm.launch("halo");
+      auto s1 = tm.launch("halo.xv");
+      auto buf = e.packed_send_buffer(6 * sizeof(double));
+      local_->pack_halo(reinterpret_cast<double*>(buf.data()), e.packed_space());
+      e.mark_packed();
+      if (!device) e.begin_packed();
+    }
+    {
+      auto s = tm.launch("elements");
+      local_->element_forces(0, L_.n_interior, dt_diss, true);
+    }
+    if (device) {
+      auto s = tm.launch("halo");
+      auto s1 = tm.launch("halo.xv");
+      e.begin_packed();
+    }
+  }
+
+  // Rebuilds when some vertex moved `slack` (contact band: the skin test compute_forces
+  // queued) or, every rebalance_every steps, when the measured imbalance exceeds the threshold;
+  // the exchange start_halo began is finished first. True when it rebuilt.
+  bool maybe_rebuild(bool dynamic) {
     bool rebuild = false, rebalance = false;
     if (contact_) {
-      auto s = timers_.scope("halo");
-      auto s1 = timers_.scope("halo.skin");
+      auto s = timers_.launch("halo");
+      auto s1 = timers_.launch("halo.skin");
       const double moved = local_->max_moved();
       double m = 0;
       MPI_Allreduce(&moved, &m, 1, MPI_DOUBLE, MPI_MAX, comm_);
@@ -829,7 +858,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       const double imb = measure_window();
       rebalance = np_ > 1 && imb > opt_.rebalance_threshold;
     }
-    if (!rebuild && !rebalance) return;
+    if (!rebuild && !rebalance) return false;
+    // The exchange and the interior tets of the old layout are not used.
+    halo_->engine().finish_packed();
+    local_->undo_dissipation();
     if (rebuild && !rebalance) adapt_slack();
     const double t0 = MPI_Wtime();
     const std::int64_t before = migrated_bytes_;
@@ -850,6 +882,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       log_.push_back({steps_, last_imbalance_, predicted_after_, migrated_bytes_ - before});
       pending_after_ = true;
     }
+    return true;
   }
 
   // The contact band for a slack (docs/parallel.md item 4): cells of diam + D_DEM + slack, in

@@ -230,6 +230,33 @@ TEST(Cuda, IntegrationMatchesCpu) {
     ASSERT_EQ(norm(g.x[i] - m.x[i]), 0.0) << i;
 }
 
+// The skin test's displacement (distributed runs): queued, then read after more work was
+// queued behind it. Known answer: the largest |x - x at mark| of the free vertices, from the
+// downloads; the value is that of the positions when it was queued, not after the next drift.
+TEST(Cuda, QueuedMaxMovedMatchesCpu) {
+  SKIP_WITHOUT_GPU();
+  const Model m = test_model();
+  Pair p = make_pair(m);
+  for (Backend* be : {p.cpu.get(), p.gpu.get()}) {
+    EXPECT_EQ(be->max_moved(), 0.0);  // nothing queued
+    be->mark_positions();
+    be->compute_forces(1e-5, m.mass_damping);
+    be->kick(2e-3);
+    be->drift(4e-3);
+  }
+  const HostFields c = p.cpu->download(false);
+  double want = 0;
+  for (std::int64_t i = 0; i < m.n_free_vertices; ++i) want = std::max(want, norm(c.x[i] - m.x[i]));
+  ASSERT_GT(want, 0.0);
+  for (Backend* be : {p.cpu.get(), p.gpu.get()}) {
+    be->queue_max_moved();
+    be->drift(4e-3);  // queued behind it
+    const double got = be->max_moved();
+    report(be == p.cpu.get() ? "max_moved.cpu" : "max_moved.gpu", rel_diff(got, want, want));
+    EXPECT_NEAR(got, want, 1e-12 * want);
+  }
+}
+
 TEST(Cuda, EnergiesMatchCpu) {
   SKIP_WITHOUT_GPU();
   const Model m = test_model();

@@ -114,7 +114,7 @@ TEST(LocalModel, TwoPartsGiveTheWholeModelsForcesBitForBit) {
     EXPECT_EQ(lm.model.contact.max_penetration, 0.05);  // the scene's contact settings carry over
     auto& be = backends.emplace_back(make_host_backend());
     be->upload(lm.model);
-    be->element_forces(0, lm.model.n_free_tets, 1e-4);
+    be->element_forces(0, lm.model.n_free_tets, 1e-4, false);
     be->assemble_forces(1e-4, g.mass_damping);
     for (const ContactShare& c : be->contact_shares())
       crossing[1 - side].push_back(lm.ids.to_global(c));
@@ -229,6 +229,33 @@ TEST(LocalModel, BuildIntoAnEarlierPartsStorageEqualsAFreshBuild) {
                 same(reused.ids.edge, fresh.ids.edge));
     if (contact) EXPECT_GT(cb.prim_v.size(), 0u);
   }
+}
+
+// A distributed rank queues its interior tets before the ranks agree that the layout stays;
+// a rebuild discards that evaluation and undo_dissipation() takes its dissipated energy back,
+// bit for bit (the tets then run again on the new layout).
+TEST(LocalModel, UndoableElementForcesRestoreTheDissipatedEnergy) {
+  auto pb = make_problem(kScene);
+  const Model& g = pb.model;
+  Model moved = g;
+  for (std::int64_t i = 0; i < g.n_free_vertices; ++i)
+    moved.v[i] = moved.v[i] + Vec3{0.1 * g.X[i].x, 0, 0};
+  Backend& be = *pb.backend;
+  be.upload(moved);
+  be.compute_forces(1e-4, g.mass_damping);
+  const double before = be.energies().dissipated;
+  ASSERT_GT(before, 0.0);
+  be.element_forces(0, g.n_free_tets, 1e-4, true);
+  EXPECT_GT(be.energies().dissipated, before);
+  be.undo_dissipation();
+  EXPECT_EQ(be.energies().dissipated, before);
+  be.undo_dissipation();  // nothing left to undo
+  EXPECT_EQ(be.energies().dissipated, before);
+  be.element_forces(0, g.n_free_tets, 1e-4, false);  // not undoable: undo is a no-op
+  const double after = be.energies().dissipated;
+  EXPECT_GT(after, before);
+  be.undo_dissipation();
+  EXPECT_EQ(be.energies().dissipated, after);
 }
 
 }  // namespace
