@@ -234,6 +234,26 @@ TEST(LocalModel, BuildIntoAnEarlierPartsStorageEqualsAFreshBuild) {
 // A distributed rank queues its interior tets before the ranks agree that the layout stays;
 // a rebuild discards that evaluation and undo_dissipation() takes its dissipated energy back,
 // bit for bit (the tets then run again on the new layout).
+// The anchor of a record (the rank owning it evaluates it): a point-face or wall record's free
+// side-1 vertex, else the free vertex of smallest global id, or none.
+TEST(LocalModel, AnchorSlotKnownAnswers) {
+  struct Ids {  // gid = index; ids >= 1000000 are a fixed body's
+    bool free(std::int64_t i) const { return i < 1000000; }
+    std::uint64_t gid(std::int64_t i) const { return static_cast<std::uint64_t>(i); }
+  } ids;
+  const std::int64_t pf[4] = {7, 3, 2, 1}, wall[4] = {7, -1, -1, -1};
+  EXPECT_EQ(anchor_slot(kPointFace, pf, ids), 0);
+  EXPECT_EQ(anchor_slot(kWall, wall, ids), 0);
+  const std::int64_t fixed_pf[4] = {1000001, 3, 2, 1};  // a fixed vertex on a free face
+  EXPECT_EQ(anchor_slot(kPointFace, fixed_pf, ids), 3);
+  const std::int64_t edges[4] = {5, 9, 2, 7};
+  EXPECT_EQ(anchor_slot(kEdgeEdge, edges, ids), 2);
+  const std::int64_t fixed_edge[4] = {1000000, 9, 1000002, 7};
+  EXPECT_EQ(anchor_slot(kEdgeEdge, fixed_edge, ids), 3);
+  const std::int64_t none[4] = {1000001, 1000002, -1, -1};
+  EXPECT_EQ(anchor_slot(kEdgeEdge, none, ids), -1);
+}
+
 TEST(LocalModel, UndoableElementForcesRestoreTheDissipatedEnergy) {
   auto pb = make_problem(kScene);
   const Model& g = pb.model;
