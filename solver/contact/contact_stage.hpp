@@ -40,6 +40,7 @@
 #include <memory>
 #include <numeric>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
@@ -63,12 +64,14 @@ namespace qdemsph {
 // Whether this process evaluates a record: it owns (index < n_free_vertices) the record's
 // anchor vertex (contact_record.hpp, anchor_slot). Every record on one process; on MPI ranks
 // exactly one rank evaluates a record (the narrow phase skips or drops the others').
+// A model's vertices are [owned free | other ranks' free (ghosts) | fixed bodies'] (one
+// process: no ghosts), so whether a vertex is free or owned is a comparison of its index, with
+// no load of its body (a ghost vertex's test in the narrow phase waited for two dependent loads).
 struct Evaluator {
   View<const std::uint64_t> vgid;
-  View<const std::int32_t> vertex_body, body_fixed;
-  std::int64_t nfv = 0;
-  bool all = true;  // one process (no ghosts): every record, no test needed
-  QDEMSPH_HD bool free(int i) const { return !body_fixed[vertex_body[i]]; }
+  std::int64_t nfv = 0, nfree = 0;  // owned free vertices; all free vertices held
+  bool all = true;                  // one process (no ghosts): every record, no test needed
+  QDEMSPH_HD bool free(int i) const { return i < nfree; }
   QDEMSPH_HD std::uint64_t gid(int i) const { return vgid[i]; }
   // A free vertex another rank owns.
   QDEMSPH_HD bool ghost(int i) const { return !all && i >= nfv && free(i); }
@@ -328,13 +331,15 @@ class ContactStage {
       for_each(HostExec{}, nv, [&](std::int64_t i) { g[i] = ids ? m.gid[i] : i; });
     });
     inv_mass_.assign(m.inv_mass);
-    ghosts_ = false;      // free vertices other ranks own (a distributed run's rank)
-    fixed_held_ = false;  // fixed bodies' vertices (their point-face hits: keep_evaluated)
-    for (std::int64_t i = nfv_; i < nv_; ++i) {
-      const bool fixed = c.body_fixed[m.body[i]];
-      ghosts_ = ghosts_ || !fixed;
-      fixed_held_ = fixed_held_ || fixed;
-    }
+    // Free vertices first (Evaluator): [0, nfv) owned, [nfv, nfree) other ranks' (ghosts).
+    nfree_ = nfv_;
+    while (nfree_ < nv_ && !c.body_fixed[m.body[nfree_]]) ++nfree_;
+    for (std::int64_t i = nfree_; i < nv_; ++i)
+      if (!c.body_fixed[m.body[i]])
+        throw std::logic_error("contact stage: free vertex " + std::to_string(i) +
+                               " after a fixed body's vertex");
+    ghosts_ = nfree_ > nfv_;     // free vertices other ranks own (a distributed run's rank)
+    fixed_held_ = nfree_ < nv_;  // fixed bodies' vertices (their point-face hits: keep_evaluated)
     pc_.resize(np_);
     pr_.resize(np_);
     pc_ref_.resize(np_);
@@ -527,9 +532,7 @@ class ContactStage {
     return reduce_sum(
         Exec{}, n_prev_, QDEMSPH_LAMBDA(std::int64_t c) { return en[c]; });
   }
-  Evaluator evaluator() const {
-    return {vgid_.cview(), vertex_body_.cview(), body_fixed_.cview(), nfv_, !ghosts_};
-  }
+  Evaluator evaluator() const { return {vgid_.cview(), nfv_, nfree_, !ghosts_}; }
   // Energy dissipated by the contact dashpots and Coulomb slip since the start [J].
   double dissipated_energy() const { return dissipated_; }
   const ContactStepStats& stats() const { return stats_; }
@@ -1060,8 +1063,8 @@ class ContactStage {
   }
 
  private:
-  std::int64_t nv_ = 0, nfv_ = 0, ntri_ = 0, ne_ = 0, np_ = 0, npf_ = 0, nwv_ = 0, nw_ = 0,
-               n_prev_ = 0;
+  std::int64_t nv_ = 0, nfv_ = 0, nfree_ = 0, ntri_ = 0, ne_ = 0, np_ = 0, npf_ = 0, nwv_ = 0,
+               nw_ = 0, n_prev_ = 0;
   double d_dem_ = 0, kn_factor_ = 0.1, kt_ratio_ = 2.0 / 7.0;
   bool self_ = false, ghosts_ = false, fixed_held_ = false;
   int nm_ = 0;
