@@ -270,15 +270,23 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     return min_over_ranks(i < 0 ? -1 : L_.vertices[i]);
   }
 
+  // The smallest global id among the tets flagged since the last call (on this layout, or on
+  // one a rebuild replaced: held_inverted_).
   std::int64_t take_inverted_tet() override {
     const std::int64_t t = local_->take_inverted_tet();
-    return min_over_ranks(t < 0 ? -1 : L_.tets[t]);
+    std::int64_t g = t < 0 ? -1 : L_.tets[t];
+    if (held_inverted_ >= 0 && (g < 0 || held_inverted_ < g)) g = held_inverted_;
+    held_inverted_ = -1;
+    return min_over_ranks(g);
   }
 
   // The deep contact of the rank holding the smallest global vertex id among the flagged ones.
   std::optional<DeepContact> take_deep_contact() override {
-    const std::optional<DeepContact> c = local_->take_deep_contact();
-    const std::int64_t gv = c ? L_.vertices[c->vertex] : -1;
+    std::optional<DeepContact> c = local_->take_deep_contact();
+    if (c) c->vertex = L_.vertices[c->vertex];
+    if (held_deep_ && (!c || held_deep_->vertex < c->vertex)) c = held_deep_;
+    held_deep_.reset();
+    const std::int64_t gv = c ? c->vertex : -1;
     const std::int64_t v = min_over_ranks(gv);
     if (v < 0) return std::nullopt;
     double mine[5] = {-1e300, -1e300, -1e300, -1e300, -1e300}, all[5];
@@ -813,6 +821,19 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     fixed_vm_ = h.von_mises;
   }
 
+  // The error flags the old layout's kernels raised, kept in global ids before a rebuild (its
+  // local indices name other items, or none, on the new layout); the next take_inverted_tet /
+  // take_deep_contact reports them.
+  void hold_flags() {
+    const std::int64_t t = local_->take_inverted_tet();
+    if (t >= 0 && held_inverted_ < 0) held_inverted_ = L_.tets[t];
+    std::optional<DeepContact> c = local_->take_deep_contact();
+    if (c && !held_deep_) {
+      c->vertex = L_.vertices[c->vertex];
+      held_deep_ = c;
+    }
+  }
+
   // Packs the ghosts' x, v and starts their exchange, and queues the interior tets (their
   // vertices are all owned): on a GPU they run while the records are copied (on the copy
   // stream) and unpacked; their time counts in "elements" at the synchronisation after the
@@ -862,6 +883,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     // The exchange and the interior tets of the old layout are not used.
     halo_->engine().finish_packed();
     local_->undo_dissipation();
+    hold_flags();
     if (rebuild && !rebalance) adapt_slack();
     const double t0 = MPI_Wtime();
     const std::int64_t before = migrated_bytes_;
@@ -1358,6 +1380,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   std::int64_t n_contact_owned_ = 0;
   std::vector<std::array<double, 6>> fixed_stress_;
   std::vector<double> fixed_vm_;
+  std::int64_t held_inverted_ = -1;  // flags of a replaced layout, global ids (hold_flags)
+  std::optional<DeepContact> held_deep_;
   // Records.
   PhaseTimers timers_;
   double setup_balance_s_ = 0, setup_migration_s_ = 0;  // of the first distribution (adopt)
