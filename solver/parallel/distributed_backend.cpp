@@ -271,20 +271,18 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   }
 
   // The smallest global id among the tets flagged since the last call (on this layout, or on
-  // one a rebuild replaced: held_inverted_).
+  // one a rebuild replaced).
   std::int64_t take_inverted_tet() override {
-    const std::int64_t t = local_->take_inverted_tet();
-    std::int64_t g = t < 0 ? -1 : L_.tets[t];
-    if (held_inverted_ >= 0 && (g < 0 || held_inverted_ < g)) g = held_inverted_;
+    hold_inverted();
+    const std::int64_t g = held_inverted_;
     held_inverted_ = -1;
     return min_over_ranks(g);
   }
 
   // The deep contact of the rank holding the smallest global vertex id among the flagged ones.
   std::optional<DeepContact> take_deep_contact() override {
-    std::optional<DeepContact> c = local_->take_deep_contact();
-    if (c) c->vertex = L_.vertices[c->vertex];
-    if (held_deep_ && (!c || held_deep_->vertex < c->vertex)) c = held_deep_;
+    hold_deep();
+    const std::optional<DeepContact> c = held_deep_;
     held_deep_.reset();
     const std::int64_t gv = c ? c->vertex : -1;
     const std::int64_t v = min_over_ranks(gv);
@@ -825,13 +823,21 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   // local indices name other items, or none, on the new layout); the next take_inverted_tet /
   // take_deep_contact reports them.
   void hold_flags() {
+    hold_inverted();
+    hold_deep();
+  }
+  // The local flag, taken, in global ids beside the held one: the smaller id is kept.
+  void hold_inverted() {
     const std::int64_t t = local_->take_inverted_tet();
-    if (t >= 0 && held_inverted_ < 0) held_inverted_ = L_.tets[t];
+    if (t < 0) return;
+    const std::int64_t g = L_.tets[t];
+    if (held_inverted_ < 0 || g < held_inverted_) held_inverted_ = g;
+  }
+  void hold_deep() {
     std::optional<DeepContact> c = local_->take_deep_contact();
-    if (c && !held_deep_) {
-      c->vertex = L_.vertices[c->vertex];
-      held_deep_ = c;
-    }
+    if (!c) return;
+    c->vertex = L_.vertices[c->vertex];
+    if (!held_deep_ || c->vertex < held_deep_->vertex) held_deep_ = c;
   }
 
   // Packs the ghosts' x, v and starts their exchange, and queues the interior tets (their
