@@ -12,11 +12,18 @@ Time per step of rank r (the step ends when the slowest rank ends):
        held tets = home tets + halo tets (a tet is computed on every rank owning one of its
        vertices, docs/parallel.md item 1: redundant work at the cuts); pairs_r = pairs per
        surface vertex x (owned + k ghost surface vertices): a rank finds candidate pairs
-       among all the surface it holds, ghosts included. k = 1.4 measured (wip-mpi aef1376,
-       cube block on 2, 4, 8 ranks: pairs 1.34, 1.80, 3.00 x the 1-rank pairs while the
-       held surface was 1.25, 1.56, 2.44 x the owned: k = 1.38, 1.43, 1.38;
-       references/benchmarks/scaling/halo_validation_cubes_devvm.json); k = 0 is the plan of
-       docs/parallel.md item 4 (each pair evaluated once, by one owner);
+       among all the surface it holds, ghosts included. k = 0.6 measured (`geometry.py
+       --validate`, pairs(N) / (N pairs(1)) = 1 + k ghost surface / owned surface): cube
+       block on 2 H100s at d32fc91, pairs 1.074 x the 1-rank pairs while the held surface was
+       1.125 x the owned, k = 0.59 (references/benchmarks/scaling/2026-11-26_x2_skin_overlap/
+       call5_h100/; in time too: the slower rank's contact and element kernels 1.708 ->
+       1.838 ms/step, k = 0.58-0.61 at h100-d32fc91's pair cost); on 2, 4, 8, 16, 32 CPU
+       ranks (5d4f73b, 27 cubes a rank, 2026-11-26_h200x2/call5_cpu/) k = 0.77, 0.70, 0.26,
+       0.48, 0.29. It was 1.4 when every rank evaluated every pair it held (wip-mpi aef1376,
+       CPU ranks 2, 4, 8: pairs 1.34, 1.80, 3.00 x with the held surface 1.25, 1.56, 2.44 x:
+       k = 1.38, 1.43, 1.38; references/benchmarks/scaling/halo_validation_cubes_devvm.json).
+       k = 0: a candidate pair of border primitives searched on one rank only
+       (docs/parallel.md "Not yet done");
        g: the share of a particle's work a ghost costs, 0.15 (a ghost is sorted into the cell
        list; the density and force loops run over owned particles only).
        Balancer: when max_r C_r / mean C - 1 exceeds the rebalance threshold (0.10, the
@@ -159,7 +166,7 @@ class Options:
     rebalance_interval: int = 0   # steps between rebalances (0: none)
     migrated_bytes: float = 0.0   # per rebalance, per rank
     pairs_per_surface_vertex: float = 0.0
-    ghost_pair_weight: float = 1.4  # k: candidate pairs per ghost surface vertex / per owned one
+    ghost_pair_weight: float = 0.6  # k: candidate pairs per ghost surface vertex / per owned one
     rebuild_s_per_step: float = 0.0  # ghost / layout rebuilds during the run, amortised (measured:
     #                                  a host-side rebuild times rebuilds per step; the same per
     #                                  rank in weak scaling, the global displacement triggers it)
@@ -360,8 +367,8 @@ def main(argv=None):
     p.add_argument("--rebuild-ms-per-step", type=float, default=0.0,
                    help="ghost / layout rebuilds during the run, amortised per step (measured: parallel "
                         "migration per step of a 2-rank record)")
-    p.add_argument("--ghost-pairs", type=float, default=1.4,
-                   help="k, candidate pairs of a ghost surface vertex per owned one (1.4 measured; 0: pairs once)")
+    p.add_argument("--ghost-pairs", type=float, default=0.6,
+                   help="k, candidate pairs of a ghost surface vertex per owned one (0.6 measured; 0: pairs once)")
     p.add_argument("--json", help="write the prediction here")
     c = sub.add_parser("calibrate", help="per-item costs from single-rank run records / bench records")
     c.add_argument("records", nargs="+")
