@@ -39,9 +39,10 @@ Time per step of rank r (the step ends when the slowest rank ends):
        node), stage = 2 (a_stage + b_r / B_stage) when halo data crosses PCIe to be packed
        on the host (today's CommEngine packs host arrays); R host round trips per step of a
        GPU rank (each: a device synchronisation, pack / unpack launches, host MPI progress;
-       bodies R = 3: the x, v halo, the contact shares, the skin test's allreduce; fluid
-       R = 4: the skin test, the x, v refresh and two rho, p, m refreshes), t_rt per round
-       trip (Network.round_trip: 0 on CPU ranks).
+       bodies R = 3: the x, v halo, the contact shares, the skin test's allreduce, the first
+       and the last beside the interior tets' kernels; fluid R = 4: the skin test, the x, v
+       refresh and two rho, p, m refreshes), t_rt per round trip (Network.round_trip: 0 on
+       CPU ranks; IPC_ROUND_TRIP).
   s    per-rank jitter (relative standard deviation of a rank's step time): the expected
        maximum of N ranks grows as s sqrt(2 ln N) (Gaussian extreme value).
   A(N) allreduce(s) per step (dt, energies): n_ar ceil(log2 N) a (a_inter beyond one node).
@@ -53,14 +54,16 @@ neighbours, on / off node), per-item costs (calibrated from single-rank records,
 
   /usr/bin/python3 scaling/model.py predict --geometry G.json --costs h200 --network staged-ndr
   /usr/bin/python3 scaling/model.py calibrate RECORDS.json ...   # per-item costs from records
+  /usr/bin/python3 scaling/model.py fit-round-trip --costs NAME RECORDS_n2.json ...  # t_rt
 """
 from __future__ import annotations
 
 import argparse
 import json
 import math
+import statistics
 import sys
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
@@ -109,15 +112,30 @@ class Network:
 #    1.70 ms/step against 1.25 predicted without it, (1.70 - 1.25) / 3 round trips; with it the
 #    model gives cubes-weak 5.82 (measured 5.99) and dambreak-weak 6.70 (measured 7.06) ms/step.
 # Host round trip of a GPU rank with device-resident halos (ipc-ndr): least squares over the
-# three weak cases on two H100s at 01b2aab (references/benchmarks/scaling/2026-11-25_h100x2_ipc/),
-# their in-run rebuilds taken out: measured minus predicted without it, cubes -0.009 ms (3 round
-# trips), dominoes +0.227 ms (3), dam break +0.41 ms (4) -> 67 us per round trip.
-IPC_ROUND_TRIP = 67e-6
+# three weak cases on two H100s at d32fc91, their in-run rebuilds taken out (`model.py
+# fit-round-trip --costs h100-d32fc91`, k 0.6; references/benchmarks/scaling/
+# 2026-11-26_x2_skin_overlap/: call5_h100/C_cubes-weak_r{1,2,3} and C_topple-weak_r{1,2,3},
+# medians, call4_h100/C_db): measured minus predicted without it, cubes +0.063 ms (3 round
+# trips), dominoes +0.213 ms (3), dam break +0.324 ms (4) -> 62.5 us per round trip. One
+# constant fits badly: residuals -0.124, +0.026, +0.074 ms (-6.3 %, +3.5 %, +1.8 % of the
+# measured 1.987, 0.741, 4.078 ms). Per round trip the cube block asks 21 us and the dam break
+# 81; the dominoes' 71 is mostly the set's cube-block tet and pair costs, which put their one-GPU
+# step at 0.496 ms against 0.635 measured (from their own one-GPU record: 23 us). Two of the
+# bodies' three (the x, v halo and, since d32fc91, the skin test's allreduce) run while the
+# device computes the interior tets, and only the contact shares wait on an idle device; the
+# fluid's four each follow a device synchronisation (skin test; the x, v and two rho, p, m
+# refreshes). The counts stand (the host still waits and runs MPI that often); the overlap
+# shows as the bodies' lower time per round trip, which one constant averages. Two H200s
+# (d32fc91, calls 3 and 6 there, each case's own one-GPU costs): cube block 22-34 us, dominoes
+# 21-27; the dam break at 98bb692 (2026-11-26_h200x2_rebuilds/call12_98bb692/new_db) 83. Before:
+# 67 us at 01b2aab (costs h100-ipc, k 1.4; 2026-11-25_h100x2_ipc/records/: cubes -0.010 ms,
+# dominoes +0.225, dam break +0.412).
+IPC_ROUND_TRIP = 62.5e-6
 
 #  * CUDA IPC peer copies between the two H100s of one host (NVLink, scaling/probes/devicecomm.cu,
 #    2026-11-25): 8 B 7.6 us (copy + stream synchronisation), 1 MB 10.7 us (98 GB/s), 16 MB 53 us
 #    (316 GB/s); the hand-shake messages add ~1 us. The host round trip of a GPU rank with these
-#    halos: calibrated on cubes-weak (no rebuilds), see "ipc-ndr".
+#    halos: IPC_ROUND_TRIP above.
 NETWORKS = {
     # What the code does today on GPUs: on a node, halo records stay in device memory and move
     # by CUDA IPC peer copies (CommEngine::use_device); between nodes they are staged through
@@ -286,6 +304,43 @@ def extend_rows(rows: list[dict], ranks: list[int], min_candidate: int = 16) -> 
     return sorted(out, key=lambda g: g["ranks"])
 
 
+# --- host round trip ---------------------------------------------------------------------
+
+def fit_round_trip(cases: list[dict]) -> dict:
+    """Least squares host round trip t of a GPU rank over cases {"measured_s": a step without
+    its in-run rebuilds, "predicted_s": the model's step without round trips, "round_trips":
+    R}: t minimises sum (d - R t)^2 with d = measured - predicted, t = sum R d / sum R^2. Each
+    case gets d ("diff_s") and its residual d - R t ("residual_s")."""
+    t = sum(c["round_trips"] * (c["measured_s"] - c["predicted_s"]) for c in cases) / sum(
+        c["round_trips"] ** 2 for c in cases)
+    return {"round_trip_s": t,
+            "cases": [dict(c, diff_s=c["measured_s"] - c["predicted_s"],
+                           residual_s=c["measured_s"] - c["predicted_s"] - c["round_trips"] * t) for c in cases]}
+
+
+def round_trip_cases(records: list[dict], costs: Costs, net: Network, ghost_pairs: float,
+                     geometry_dir: Path, pairs_per_surface_vertex: dict) -> list[dict]:
+    """Cases for fit_round_trip from multi-rank records of weak sweeps, one case per sweep:
+    measured = the median over its records of step_s less the in-run rebuilds and rebalances
+    (phases_per_step migration + balance), predicted = step_time of its geometry row
+    (geometry_<sweep>_<preset>.json in geometry_dir) without round trips, R = round_trips()."""
+    by = {}
+    for r in records:
+        by.setdefault((r["sweep"], r["preset"], r["ranks"]), []).append(r)
+    out = []
+    for (sweep, preset, n), rs in sorted(by.items()):
+        geo = json.loads((Path(geometry_dir) / f"geometry_{sweep}_{preset}.json").read_text())
+        row = next(g for g in geo["rows"] if g["ranks"] == n)
+        fluid = any(sum(g.get("owned_particles", [0])) > 0 for g in geo["rows"])
+        opt = Options(pairs_per_surface_vertex=pairs_per_surface_vertex.get(sweep, 0.0), ghost_pair_weight=ghost_pairs)
+        pred = step_time(row, costs, replace(net, round_trip=0.0), opt)["step_s"]
+        meas = [r["step_s"] - r["phases_per_step"].get("migration", 0.0) - r["phases_per_step"].get("balance", 0.0)
+                for r in rs]
+        out.append({"sweep": sweep, "ranks": n, "records": len(rs), "measured_s": statistics.median(meas),
+                    "predicted_s": pred, "round_trips": round_trips(fluid)})
+    return out
+
+
 # --- costs -------------------------------------------------------------------------------
 
 def costs_from_record(rec: dict) -> dict:
@@ -374,7 +429,30 @@ def main(argv=None):
     c.add_argument("records", nargs="+")
     c.add_argument("--name", help="store the cost set under this name in scaling/costs.json")
     c.add_argument("--source", default="", help="where the records come from (stored with the set)")
+    f = sub.add_parser("fit-round-trip", help="host round trip of a GPU rank: least squares over multi-rank "
+                       "records of weak sweeps, their in-run rebuilds taken out")
+    f.add_argument("records", nargs="+", help="run.py records on N > 1 ranks (several of one sweep: the median)")
+    f.add_argument("--costs", required=True)
+    f.add_argument("--network", default="ipc-ndr", choices=list(NETWORKS))
+    f.add_argument("--ghost-pairs", type=float, default=Options.ghost_pair_weight)
+    f.add_argument("--geometry-dir", default=str(REPO / "references" / "benchmarks" / "scaling"))
     a = ap.parse_args(argv)
+    if a.cmd == "fit-round-trip":
+        ppv = json.loads((HERE / "costs.json").read_text()).get("pairs_per_surface_vertex", {})
+        cases = round_trip_cases([json.loads(Path(x).read_text()) for x in a.records], load_costs(a.costs),
+                                 NETWORKS[a.network], a.ghost_pairs, Path(a.geometry_dir), ppv)
+        fit = fit_round_trip(cases)
+        t = fit["round_trip_s"]
+        print(f"costs {a.costs}, network {a.network} (its round trip set to 0), ghost pairs k {a.ghost_pairs}")
+        print(f"{'sweep':15s} {'N':>2s} {'runs':>4s} {'R':>2s} {'measured':>9s} {'predicted':>9s} {'diff':>7s} "
+              f"{'diff/R':>7s} {'residual':>8s}")
+        for c in fit["cases"]:
+            print(f"{c['sweep']:15s} {c['ranks']:2d} {c['records']:4d} {c['round_trips']:2d} "
+                  f"{c['measured_s'] * 1e3:9.3f} {c['predicted_s'] * 1e3:9.3f} {c['diff_s'] * 1e3:+7.3f} "
+                  f"{c['diff_s'] / c['round_trips'] * 1e6:5.0f}us {c['residual_s'] * 1e3:+8.3f}")
+        print(f"(ms/step; measured: step without in-run rebuilds, median over runs; predicted: without round "
+              f"trips)\nleast squares: {t * 1e6:.1f} us per round trip (now {NETWORKS[a.network].round_trip * 1e6:.1f})")
+        return 0
     if a.cmd == "calibrate":
         recs = [json.loads(Path(f).read_text()) for f in a.records]
         for f, rec in zip(a.records, recs):

@@ -1,4 +1,5 @@
 """Known answers of the performance model (scaling/model.py)."""
+import json
 import math
 import sys
 from dataclasses import replace
@@ -186,3 +187,43 @@ def test_device_resident_halos_stage_only_what_leaves_the_node_and_rebuilds_add_
     assert reb["step_s"] - model.step_time(g, COSTS, NET, NOJIT)["step_s"] == pytest.approx(1.6e-3)
     one_rank = model.step_time(rows([1])[0], COSTS, NET, replace(NOJIT, rebuild_s_per_step=1.6e-3))
     assert one_rank["rebuild_s"] == 0.0  # one rank rebuilds nothing
+
+
+def test_round_trip_is_the_least_squares_over_the_cases():
+    # d = 0.2 ms over 3 round trips and 0.5 ms over 4: t = (3 x 0.2 + 4 x 0.5) / (9 + 16) = 0.104 ms
+    cases = [{"measured_s": 1.2e-3, "predicted_s": 1.0e-3, "round_trips": 3},
+             {"measured_s": 4.5e-3, "predicted_s": 4.0e-3, "round_trips": 4}]
+    f = model.fit_round_trip(cases)
+    assert f["round_trip_s"] == pytest.approx(1.04e-4)
+    assert [c["diff_s"] for c in f["cases"]] == pytest.approx([2e-4, 5e-4])
+    assert [c["residual_s"] for c in f["cases"]] == pytest.approx([2e-4 - 3.12e-4, 5e-4 - 4.16e-4])
+
+
+def test_round_trip_cases_take_out_rebuilds_and_round_trips(tmp_path):
+    (tmp_path / "geometry_s_cuda.json").write_text(json.dumps({"rows": rows([1, 2])}))
+    # steps less migration and balance: 2.0, 2.2, 2.2 ms -> median 2.2
+    recs = [{"sweep": "s", "preset": "cuda", "ranks": 2, "step_s": t, "phases_per_step": {"migration": m, "balance": b}}
+            for t, m, b in [(3.0e-3, 1.0e-3, 0.0), (2.5e-3, 0.2e-3, 0.1e-3), (2.2e-3, 0.0, 0.0)]]
+    net = replace(model.NETWORKS["ideal"], round_trip=1e-4)  # not in the prediction
+    (c,) = model.round_trip_cases(recs, COSTS, net, 0.0, tmp_path, {})
+    assert c["records"] == 3 and c["round_trips"] == 3  # no particles: bodies
+    assert c["measured_s"] == pytest.approx(2.2e-3)
+    jitter = 0.01 * math.sqrt(2 * math.log(2))  # Options' default s; ideal: no exchange, no allreduce
+    assert c["predicted_s"] == pytest.approx((1000 + 200) * 1e-9 * (1 + jitter))
+
+
+def test_ipc_round_trip_is_the_fit_of_its_records():
+    """IPC_ROUND_TRIP is what `model.py fit-round-trip` gives on the records its comment names
+    (a cost set, geometry or option change that moves it means: fit it again)."""
+    d = model.REPO / "references" / "benchmarks" / "scaling" / "2026-11-26_x2_skin_overlap"
+    files = [d / f"call5_h100/C_{s}_r{i}/records/{s}_cuda_n2.json" for s in ("cubes-weak", "topple-weak")
+             for i in (1, 2, 3)] + [d / "call4_h100/C_db/records/dambreak-weak_cuda_n2.json"]
+    if not all(f.exists() for f in files):
+        pytest.skip("records not present")
+    ppv = json.loads((model.HERE / "costs.json").read_text())["pairs_per_surface_vertex"]
+    cases = model.round_trip_cases([json.loads(f.read_text()) for f in files], model.load_costs("h100-d32fc91"),
+                                   model.NETWORKS["ipc-ndr"], model.Options.ghost_pair_weight,
+                                   model.REPO / "references" / "benchmarks" / "scaling", ppv)
+    assert [c["round_trips"] for c in cases] == [3, 4, 3]  # cubes, dam break, dominoes
+    assert model.fit_round_trip(cases)["round_trip_s"] == pytest.approx(model.IPC_ROUND_TRIP, abs=0.5e-6)
+    assert model.NETWORKS["ipc-ndr"].round_trip == model.IPC_ROUND_TRIP
