@@ -310,7 +310,9 @@ def fit_round_trip(cases: list[dict]) -> dict:
     """Least squares host round trip t of a GPU rank over cases {"measured_s": a step without
     its in-run rebuilds, "predicted_s": the model's step without round trips, "round_trips":
     R}: t minimises sum (d - R t)^2 with d = measured - predicted, t = sum R d / sum R^2. Each
-    case gets d ("diff_s") and its residual d - R t ("residual_s")."""
+    case gets d ("diff_s") and its residual d - R t ("residual_s"). step_time also applies the
+    jitter factor to the round trips (1 + 0.01 sqrt(2 ln 2): 1.2 % more than R t on 2 ranks); the
+    fit leaves it out, as the calibrations before it did."""
     t = sum(c["round_trips"] * (c["measured_s"] - c["predicted_s"]) for c in cases) / sum(
         c["round_trips"] ** 2 for c in cases)
     return {"round_trip_s": t,
