@@ -270,11 +270,12 @@ def prediction_plots():
     figs, md = [], []
     cost_doc = json.loads((HERE / "costs.json").read_text())
     # (network, overlap, ghost pair weight k): today's stepper (device-resident halos on a node,
-    # k = 1.4 measured, no overlap), contact pairs evaluated once (k = 0), and GPU-resident halos
+    # k measured (model.Options), no overlap), contact pairs evaluated once (k = 0), and GPU-resident halos
     # between nodes too (CUDA-aware MPI) with full overlap. In-run rebuilds are not in these
     # (scaling/README.md: measured, added by --rebuild-ms-per-step).
-    plan = [("cuda", "h100-ipc", [("ipc-ndr", 0.0, 1.4), ("ipc-ndr", 0.0, 0.0), ("cuda-aware-ndr", 1.0, 0.0)]),
-            ("cpu", "cpu-core-devvm", [("cpu-shm", 0.0, 1.4), ("cpu-shm", 0.0, 0.0), ("tsubame25", 0.0, 0.0)])]
+    k = model.Options().ghost_pair_weight
+    plan = [("cuda", "h100-d32fc91", [("ipc-ndr", 0.0, k), ("ipc-ndr", 0.0, 0.0), ("cuda-aware-ndr", 1.0, 0.0)]),
+            ("cpu", "cpu-core-devvm", [("cpu-shm", 0.0, k), ("cpu-shm", 0.0, 0.0), ("tsubame25", 0.0, 0.0)])]
     ranks = [1, 2, 4, 8, 16, 32, 64, 128, 256, 512]
     for gfile in sorted(RECORDS.glob("geometry_*.json")):
         geo = json.loads(gfile.read_text())
@@ -367,8 +368,8 @@ def main(argv=None):
         figs += pf
         md += ["\n## Model predictions (not measurements)",
                "\nEfficiency against 1 rank (model.py; geometry from geometry_*.json, costs from costs.json). "
-               "k: candidate contact pairs of a ghost surface vertex per owned one (1.4 measured on the stepper "
-               "at wip-mpi aef1376; 0: each pair once). Assumed, not measured: the GPU contact cost per pair, "
+               f"k: candidate contact pairs of a ghost surface vertex per owned one ({model.Options().ghost_pair_weight:g} "
+               "measured on the stepper at d32fc91, scaling/model.py; 0: each pair once). Assumed, not measured: "
                "the network parameters (model.NETWORKS), and the SPH halo bytes (the distributed fluid does not record them yet)."] + pm
     head = ["# qdemsph scaling report", "", f"{len(recs)} run records ({len(bad)} not ok) from "
             + ", ".join(a.inputs), ""]
