@@ -233,6 +233,11 @@ def round_trips(has_fluid: bool) -> int:
     return 4 if has_fluid else 3
 
 
+def geometry_round_trips(geo: dict) -> int:
+    """round_trips() of a geometry record's scene (geometry.py): fluid when a row owns particles."""
+    return round_trips(any(sum(g.get("owned_particles", [0])) > 0 for g in geo["rows"]))
+
+
 def step_time(geo: dict, costs: Costs, net: Network, opt: Options) -> dict:
     """Predicted time per step for one geometry row (geometry.py output for N ranks). An
     extrapolated row (extend_rows) holds candidate rows of smaller N: each is evaluated as if
@@ -333,13 +338,12 @@ def round_trip_cases(records: list[dict], costs: Costs, net: Network, ghost_pair
     for (sweep, preset, n), rs in sorted(by.items()):
         geo = json.loads((Path(geometry_dir) / f"geometry_{sweep}_{preset}.json").read_text())
         row = next(g for g in geo["rows"] if g["ranks"] == n)
-        fluid = any(sum(g.get("owned_particles", [0])) > 0 for g in geo["rows"])
         opt = Options(pairs_per_surface_vertex=pairs_per_surface_vertex.get(sweep, 0.0), ghost_pair_weight=ghost_pairs)
         pred = step_time(row, costs, replace(net, round_trip=0.0), opt)["step_s"]
         meas = [r["step_s"] - r["phases_per_step"].get("migration", 0.0) - r["phases_per_step"].get("balance", 0.0)
                 for r in rs]
         out.append({"sweep": sweep, "ranks": n, "records": len(rs), "measured_s": statistics.median(meas),
-                    "predicted_s": pred, "round_trips": round_trips(fluid)})
+                    "predicted_s": pred, "round_trips": geometry_round_trips(geo)})
     return out
 
 
@@ -488,7 +492,7 @@ def main(argv=None):
         ppv = json.loads((HERE / "costs.json").read_text()).get("pairs_per_surface_vertex", {}).get(geo.get("sweep") or "", 0.0)
     rt = a.round_trips
     if rt is None:
-        rt = round_trips(any(sum(g.get("owned_particles", [0])) > 0 for g in geo["rows"]))
+        rt = geometry_round_trips(geo)
     opt = Options(overlap=a.overlap, jitter=a.jitter, pairs_per_surface_vertex=ppv, ghost_pair_weight=a.ghost_pairs,
                   rebalance_threshold=None if a.static else a.threshold, round_trips=rt,
                   rebuild_s_per_step=a.rebuild_ms_per_step * 1e-3)

@@ -292,7 +292,8 @@ def prediction_plots():
             md.append("|---|" + "---:|" * (len(rows) + 1))
             for net, ov, k in lines:
                 pred = model.predict(rows, costs, model.NETWORKS[net],
-                                     model.Options(pairs_per_surface_vertex=ppv, overlap=ov, ghost_pair_weight=k))
+                                     model.Options(pairs_per_surface_vertex=ppv, overlap=ov, ghost_pair_weight=k,
+                                                   round_trips=model.geometry_round_trips(geo)))
                 lab = f"{net}, overlap {ov:g}, k {k:g}"
                 ax.plot([p["ranks"] for p in pred], [p["efficiency_vs_1"] for p in pred], "o-", ms=3, label=lab)
                 e8 = pred[-1].get("efficiency_vs_8")
