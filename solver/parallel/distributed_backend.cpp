@@ -869,8 +869,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   }
 
   // Rebuilds when some vertex moved `slack` (contact band: the skin test compute_forces
-  // queued) or, every rebalance_every steps, when the measured imbalance exceeds the threshold;
-  // the exchange start_halo began is finished first. True when it rebuilt.
+  // queued) or, every rebalance_every steps, when the measured imbalance exceeds the threshold
+  // and a new cut pays for its rebuild (recut_pays; a threshold of 0 re-cuts at every
+  // measurement, as the fluid's); the exchange start_halo began is finished first. True when it
+  // rebuilt.
   bool maybe_rebuild(bool dynamic) {
     bool rebuild = false, rebalance = false;
     if (contact_) {
@@ -882,8 +884,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       rebuild = m > slack_;
     }
     if (dynamic && steps_ % opt_.rebalance_every == 0) {
-      const double imb = measure_window();
-      rebalance = np_ > 1 && imb > opt_.rebalance_threshold;
+      const Window w = measure_window();
+      rebalance = np_ > 1 && w.imbalance > opt_.rebalance_threshold &&
+                  (opt_.rebalance_threshold == 0 ||
+                   recut_pays(w.imbalance / (1 + w.imbalance), w.busiest_step_s,
+                              opt_.rebalance_every, w.rebuild_s));
     }
     if (!rebuild && !rebalance) return false;
     // The exchange and the interior tets of the old layout are not used.
@@ -935,9 +940,15 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
 
   double seconds(const char* phase) const { return seconds_of(timers_.seconds(), phase); }
 
+  // A window's measurement: max / mean - 1 of the ranks' busy time, the busiest rank's busy
+  // seconds a step, and the largest last rebuild's seconds over the ranks.
+  struct Window {
+    double imbalance = 0, busiest_step_s = 0, rebuild_s = 0;
+  };
+
   // Busy time of each rank since the last window: the imbalance, and the time per item that
   // weights the cost of the next partition.
-  double measure_window() {
+  Window measure_window() {
     const double contact = local_contact_seconds();
     const double te = seconds("elements") - contact, ti = seconds("integration");
     const double busy = te + ti + contact;
@@ -949,11 +960,12 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
                    static_cast<double>(L_.n_owned),
                    static_cast<double>(n_contact_owned_)};
     mark_[0] = busy, mark_[1] = te, mark_[2] = ti, mark_[3] = contact;
-    double mx = 0;
-    MPI_Allreduce(&w[0], &mx, 1, MPI_DOUBLE, MPI_MAX, comm_);
+    double mx[2] = {w[0], rebuild_s_};
+    MPI_Allreduce(MPI_IN_PLACE, mx, 2, MPI_DOUBLE, MPI_MAX, comm_);
     allreduce_sum_same(comm_, w, 7);
     const double mean = w[0] / np_;
-    const double imb = mean > 0 ? mx / mean - 1 : 0.0;
+    const double imb = mean > 0 ? mx[0] / mean - 1 : 0.0;
+    const std::int64_t n = steps_ - window_start_;
     if (w[4] > 0 && w[1] > 0) w_.tet = w[1] / w[4];
     if (w[5] > 0 && w[2] > 0) w_.vertex = w[2] / w[5];
     if (w[6] > 0 && w[3] > 0) w_.contact = w[3] / w[6];
@@ -964,7 +976,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
     last_imbalance_ = imb;
     window_start_ = steps_;
-    return imb;
+    return {imb, n > 0 ? mx[0] / static_cast<double>(n) : 0.0, mx[1]};
   }
 
   // Moves the state in `s` (any distribution over the ranks) to its owners and installs the

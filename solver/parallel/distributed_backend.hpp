@@ -30,10 +30,11 @@
 //
 // Rebalancing: every rebalance_every steps the busy time (elements, integration, contact)
 // of each rank over the window gives the imbalance max/mean - 1 and the time per tet, per
-// vertex and per contact vertex; above rebalance_threshold the tree is refined and cut again
-// with those costs (balance.hpp), the state migrates (MigratePlan) and the halo plans are
-// rebuilt. Every migration goes through a gid-keyed StateSlice, the same form a checkpoint
-// is gathered from, so a restart on any number of ranks is adopt(slice).
+// vertex and per contact vertex; above rebalance_threshold, when the busiest rank's excess over
+// the next window outweighs a rebuild's measured seconds (recut_pays, rebuild_policy.hpp), the
+// tree is refined and cut again with those costs (balance.hpp), the state migrates (MigratePlan)
+// and the halo plans are rebuilt. Every migration goes through a gid-keyed StateSlice, the same
+// form a checkpoint is gathered from, so a restart on any number of ranks is adopt(slice).
 #pragma once
 
 #include <array>
