@@ -22,8 +22,9 @@
 //     a thin body is not a penetration); a per-vertex gather (add_forces: count, scan, fill,
 //     segment sort by record key, then slot) adds it to f in a fixed order (deterministic);
 //     on an MPI rank, which evaluates only the records anchored at its owned vertices
-//     (Evaluator), the shares of other ranks' vertices leave by shares() and arrive at their
-//     owners' add_forces, which sort them in among their own entries: the one-rank order;
+//     (Evaluator), the shares of other ranks' vertices leave by shares() (which sums each
+//     vertex's own entries meanwhile) and arrive at their owners' add_forces, which merges
+//     them with the vertex's own entries by key: the one-rank order;
 //  4. energy: the springs' stored energy and the step's dissipation per contact
 //     (physics/contact_law.hpp, contact_energy; the non-potential force h is history like the
 //     spring), plus, for touches that ended, their spring energy and the second half of their
@@ -35,13 +36,16 @@
 // Data: SoA views for topology and history; contact records are a transient AoS array.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <map>
 #include <memory>
 #include <numeric>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <utility>
 
 #include "contact/contact_record.hpp"
@@ -229,13 +233,9 @@ struct AppendRecord {
 // then slot, the order of one process.
 struct ContactEntries {
   std::int64_t nl = 0;
-  View<const int> v;
   Vec3CView f;
   View<const std::uint64_t> k1, k2;
   View<const ContactShare> in;
-  QDEMSPH_HD int vertex(std::int64_t e) const {
-    return e < nl ? v[e] : static_cast<int>(in[e - nl].vertex);
-  }
   QDEMSPH_HD Vec3 force(std::int64_t e) const { return e < nl ? f[e] : in[e - nl].f; }
   QDEMSPH_HD bool before(std::int64_t a, std::int64_t b) const {
     if (a < nl && b < nl) return a < b;
@@ -368,6 +368,7 @@ class ContactStage {
   // run_scene can report "elements" without contact.
   void evaluate(Vec3CView x, Vec3CView v, double dt) {
     timed_ = dt > 0;
+    local_sorted_ = false;
     PhaseTimers scratch;
     PhaseTimers& tm = timed_ ? timers_ : scratch;
     std::int64_t npairs = 0;
@@ -391,6 +392,9 @@ class ContactStage {
 
   // The last evaluation's force shares of free vertices held but not owned (an MPI rank's
   // ghosts; none on one process), keys and vertices in this model's ids, in no fixed order.
+  // Meanwhile each vertex's own entries are sorted and summed (gather_local): on a GPU that runs
+  // while the host reads the shares and the ranks exchange them, and add_forces merges what
+  // arrives.
   std::vector<ContactShare> shares() {
     if (!ghosts_) return {};
     const std::int64_t ne = 4 * n_prev_;
@@ -398,8 +402,7 @@ class ContactStage {
     const auto efc = ent_f_.cview();
     const auto k1 = pk1_.cview(), k2 = pk2_.cview();
     const Evaluator ev = evaluator();
-    std::int64_t n = 0;
-    for (int pass = 0; pass < 2; ++pass) {  // as narrow_phase: again with room for all
+    const auto compact = [&] {
       count_.zero();
       ContactShare* out = out_.view().p;
       int* count = count_.view().p;
@@ -418,12 +421,20 @@ class ContactStage {
             s.f = efc[e];
             out[k] = s;
           });
-      n = read_back(count_, 0);
-      if (n <= out_.size()) break;
+    };
+    compact();
+    if constexpr (S == Space::Cuda) shares_mark_.record();
+    gather_local({});
+    int count = 0;
+    read_marked(&count, count_.cview().p, sizeof(int));
+    std::int64_t n = count;
+    if (n > out_.size()) {  // as narrow_phase: again with room for all (the count is exact)
       out_.resize(n + n / 4 + 64);
+      compact();
+      if constexpr (S == Space::Cuda) shares_mark_.record();
     }
     std::vector<ContactShare> h(n);
-    if (n > 0) space_copy(h.data(), Space::Host, out_.cview().p, S, sizeof(ContactShare) * n);
+    read_marked(h.data(), out_.cview().p, sizeof(ContactShare) * n);
     return h;
   }
 
@@ -434,12 +445,14 @@ class ContactStage {
   void add_forces(Vec3View f, const std::vector<ContactShare>& in = {}) {
     PhaseTimers scratch;
     auto scope = (timed_ ? timers_ : scratch).scope("contact.force");
-    const auto nin = static_cast<std::int64_t>(in.size());
-    if (in_.size() < nin) in_.resize(nin + nin / 4 + 64);  // grows only: no allocation per step
-    if (nin > 0) space_copy(in_.view().p, S, in.data(), Space::Host, sizeof(ContactShare) * nin);
-    const std::int64_t ne = 4 * n_prev_ + nin;
-    if (vent_.size() < ne) vent_.resize(ne + ne / 4 + 64);
-    gather(f, ne);
+    if (!ghosts_) {
+      if (!in.empty()) throw std::logic_error("contact shares for a model without ghosts");
+      gather_local(f);
+      return;
+    }
+    if (!local_sorted_) gather_local({});
+    merge_shares(f, in);
+    local_sorted_ = false;
   }
 
   // The state between steps (contact_state.hpp): the whole history of the last force
@@ -549,7 +562,7 @@ class ContactStage {
            pen_.bytes() + pet_.bytes() + nen_.bytes() + net_.bytes() + ediss_.bytes() +
            ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() + pr_ref_.bytes() +
            cells_.bytes() + pairs_.bytes() + vgid_.bytes() + rec_tmp_.bytes() + in_.bytes() +
-           out_.bytes() + keep_.bytes();
+           sl_.bytes() + out_.bytes() + keep_.bytes();
   }
 
   ContactTopology topology() const {
@@ -993,43 +1006,111 @@ class ContactStage {
     }
   }
 
-  // Gather per vertex: count, scan, fill, sort each vertex's entries, sum.
-  void gather(Vec3View f, std::int64_t ne) {
-    const ContactEntries ent{4 * n_prev_,  ent_v_.cview(), ent_f_.cview(),
-                             pk1_.cview(), pk2_.cview(),   in_.cview()};
+  // Each vertex's entries of the last evaluation sorted by record key, then slot (count, scan,
+  // fill, sort) and summed: into f on one process; on an MPI rank, where other ranks' shares
+  // may follow, into sl_ (merge_shares adds them to f).
+  void gather_local(Vec3View f) {
+    const std::int64_t ne = 4 * n_prev_;
+    if (vent_.size() < ne) vent_.resize(ne + ne / 4 + 64);  // grows only: no allocation per step
+    if (ghosts_ && sl_.size() < nfv_) sl_.resize(nfv_);
+    const auto ev = ent_v_.cview();
+    const auto ef = ent_f_.cview();
     const auto vcnt = vcnt_.view();
     const auto vcur = vcur_.view();
     const auto vent = vent_.view();
+    const auto sl = sl_.view();
+    const bool into_f = !ghosts_;
     vcnt_.zero();  // memset: no parallel region for a loop without work
     vcur_.zero();
     for_each(
         Exec{}, ne, QDEMSPH_LAMBDA(std::int64_t e) {
-          const int i = ent.vertex(e);
+          const int i = ev[e];
           if (i >= 0) atomic_inc(&vcnt[i]);
         });
     exclusive_scan(Exec{}, vcnt, nv_);
     for_each(
         Exec{}, ne, QDEMSPH_LAMBDA(std::int64_t e) {
-          const int i = ent.vertex(e);
+          const int i = ev[e];
           if (i >= 0) vent[vcnt[i] + atomic_inc(&vcur[i])] = static_cast<int>(e);
         });
+    // Local entries are in key order by index (the records are sorted by key, e = 4 record +
+    // slot); insertion sort: a vertex has few entries.
     for_each(
         Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
           const int b = vcnt[i], e = vcnt[i + 1];
           if (b == e) return;
-          for (int k = b + 1; k < e; ++k) {  // insertion sort: a vertex has few entries
+          for (int k = b + 1; k < e; ++k) {
             const int val = vent[k];
             int j = k - 1;
-            while (j >= b && ent.before(val, vent[j])) {
+            while (j >= b && val < vent[j]) {
               vent[j + 1] = vent[j];
               --j;
             }
             vent[j + 1] = val;
           }
           Vec3 s{};
-          for (int k = b; k < e; ++k) s += ent.force(vent[k]);
+          for (int k = b; k < e; ++k) s += ef[vent[k]];
+          if (into_f)
+            f.set(i, f[i] + s);
+          else
+            sl.set(i, s);
+        });
+    local_sorted_ = true;
+  }
+
+  // f[i] += the contact force on each free vertex: gather_local's sum, or, for a vertex that
+  // other ranks sent shares for, its entries and those shares merged in key order and summed
+  // (the one-rank order). The shares are sorted by vertex, then key, on the host (they are few).
+  void merge_shares(Vec3View f, std::vector<ContactShare> in) {
+    std::sort(in.begin(), in.end(), [](const ContactShare& a, const ContactShare& b) {
+      return std::tie(a.vertex, a.k1, a.k2, a.slot) < std::tie(b.vertex, b.k1, b.k2, b.slot);
+    });
+    const auto nin = static_cast<std::int64_t>(in.size());
+    if (in_.size() < nin) in_.resize(nin + nin / 4 + 64);  // grows only: no allocation per step
+    if (nin > 0) space_copy(in_.view().p, S, in.data(), Space::Host, sizeof(ContactShare) * nin);
+    const ContactEntries ent{4 * n_prev_, ent_f_.cview(), pk1_.cview(), pk2_.cview(), in_.cview()};
+    const auto vcnt = vcnt_.cview();
+    const auto vent = vent_.cview();
+    const auto sl = sl_.cview();
+    const auto sh = in_.cview();
+    for_each(
+        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+          std::int64_t lo = 0, hi = nin;  // this vertex's shares: [lo, end) of the sorted ones
+          while (lo < hi) {
+            const std::int64_t mid = (lo + hi) / 2;
+            if (sh[mid].vertex < i)
+              lo = mid + 1;
+            else
+              hi = mid;
+          }
+          std::int64_t end = lo;
+          while (end < nin && sh[end].vertex == i) ++end;
+          const int b = vcnt[i], e = vcnt[i + 1];
+          if (lo == end) {
+            if (b < e) f.set(i, f[i] + sl[i]);
+            return;
+          }
+          Vec3 s{};
+          int a = b;
+          for (std::int64_t c = lo; a < e || c < end;) {
+            const bool local = c == end || (a < e && ent.before(vent[a], ent.nl + c));
+            s += local ? ent.force(vent[a++]) : ent.force(ent.nl + c++);
+          }
           f.set(i, f[i] + s);
         });
+  }
+
+  // n bytes of device memory written before the last shares_mark_, read without waiting for the
+  // kernels queued since (gather_local): on this process's copy stream.
+  void read_marked(void* dst, const void* src, std::size_t bytes) {
+    if (bytes == 0) return;
+    if constexpr (S == Space::Cuda) {
+      shares_mark_.wait();
+      cuda_copy_async(dst, src, bytes);
+      cuda_copy_wait();
+    } else {
+      std::memcpy(dst, src, bytes);
+    }
   }
 
   // Drops the records another rank evaluates (a fixed vertex's point-face hits: tested wherever
@@ -1081,6 +1162,9 @@ class ContactStage {
   CandidatePairs<Exec> pairs_;
   Buffer<ContactRecord> rec_{S}, rec_tmp_{S};
   Buffer<ContactShare> in_{S}, out_{S};  // shares received and to send (add_forces, shares)
+  Vec3Buffer sl_{S};                     // an MPI rank's local contact force sums (gather_local)
+  bool local_sorted_ = false;            // gather_local ran for the last evaluation
+  DeviceMark shares_mark_;               // after the shares' compaction (shares, read_marked)
   Buffer<int> keep_{S};
   bool timed_ = false;  // the last evaluation was a dynamic step
   Buffer<int> ent_v_{S}, vcnt_{S}, vcur_{S}, vent_{S}, count_{S};

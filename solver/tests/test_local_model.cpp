@@ -11,10 +11,12 @@
 #include <cstring>
 #include <memory>
 #include <set>
+#include <string>
 #include <type_traits>
 #include <vector>
 
 #include "contact/contact_record.hpp"
+#include "core/memory.hpp"
 #include "integrate/backend.hpp"
 #include "parallel/local_model.hpp"
 #include "scene_fixture.hpp"
@@ -73,8 +75,9 @@ LocalLayout layout_of(const Model& g, const ModelIndex& ix, int side, double cut
   return L;
 }
 
-TEST(LocalModel, TwoPartsGiveTheWholeModelsForcesBitForBit) {
-  auto pb = make_problem(kScene);
+// The parts on `backend` against the whole model on the same backend.
+void two_parts_give_the_whole_models_forces(const std::string& backend) {
+  auto pb = make_problem(kScene, "test.yaml", backend);
   const Model& g = pb.model;
   ASSERT_TRUE(g.contact.enabled);
   const ModelIndex ix = index_model(g);
@@ -112,7 +115,7 @@ TEST(LocalModel, TwoPartsGiveTheWholeModelsForcesBitForBit) {
     EXPECT_EQ(lm.model.n_free_vertices, L.n_owned);
     EXPECT_EQ(lm.model.n_counted_tets, L.n_home);
     EXPECT_EQ(lm.model.contact.max_penetration, 0.05);  // the scene's contact settings carry over
-    auto& be = backends.emplace_back(make_host_backend());
+    auto& be = backends.emplace_back(make_backend(backend));
     be->upload(lm.model);
     be->element_forces(0, lm.model.n_free_tets, 1e-4, false);
     be->assemble_forces(1e-4, g.mass_damping);
@@ -176,6 +179,17 @@ TEST(LocalModel, TwoPartsGiveTheWholeModelsForcesBitForBit) {
   EXPECT_NEAR(sum.kinetic, whole_e.kinetic, 1e-12 * std::abs(whole_e.kinetic));
   EXPECT_NEAR(sum.potential, whole_e.potential, 1e-12 * std::abs(whole_e.potential));
   EXPECT_NEAR(sum.dissipated, whole_e.dissipated, 1e-12 * std::abs(whole_e.dissipated));
+}
+
+TEST(LocalModel, TwoPartsGiveTheWholeModelsForcesBitForBit) {
+  two_parts_give_the_whole_models_forces("cpu");
+}
+
+// On a GPU the shares are read on the copy stream while the parts' own entries are summed
+// (ContactStage::shares), then merged in key order.
+TEST(LocalModel, TwoPartsOnTheGpuGiveTheWholeModelsForcesBitForBit) {
+  if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
+  two_parts_give_the_whole_models_forces("cuda");
 }
 
 // A rebuild into an earlier part's LocalModel (the distributed backend keeps one, so that its
