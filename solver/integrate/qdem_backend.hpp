@@ -14,6 +14,7 @@
 #include <atomic>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
 
 #include "contact/contact_stage.hpp"
 #include "core/error.hpp"
@@ -83,21 +84,34 @@ class QdemBackend final : public Backend {
     }
   }
 
-  // Vertex -> (corner k, tet t) list, entries k * nt + t, ordered by (k, global tet id): on one
-  // rank that is increasing order; a rank of a distributed run sums the corners of its vertices
-  // in the same order, so forces agree with one rank bit for bit. Built in parallel: counted and
-  // filled through atomic cursors (in any order), then each vertex's entries sorted (unique
-  // keys: the lists do not depend on the threads). (A model without tet ids, e.g. a benchmark's,
-  // is numbered by index.)
+  // Vertex -> (corner k, tet t) lists of the gathered vertices [0, nfv), entries k * nt + t,
+  // ordered by (k, global tet id): on one rank that is increasing order; a rank of a distributed
+  // run sums the corners of its vertices in the same order, so forces agree with one rank bit for
+  // bit. The model's own lists when it has them (a distributed rank's part, Model::corner_off),
+  // else built here in parallel: counted and filled through atomic cursors (in any order), then
+  // each vertex's entries sorted (unique keys: the lists do not depend on the threads). (A model
+  // without tet ids, e.g. a benchmark's, is numbered by index.)
   void upload_corner_lists(const Model& m) {
-    const std::int64_t nv = nv_, nt = nt_, nft = nft_;
+    const std::int64_t nv = nfv_, nt = nt_, nft = nft_;
+    if (!m.corner_off.empty()) {
+      if (static_cast<std::int64_t>(m.corner_off.size()) != nv + 1 ||
+          static_cast<std::int64_t>(m.corner_ent.size()) != m.corner_off.back())
+        throw std::logic_error("model corner lists do not fit its free vertices");
+      csr_off_.assign(m.corner_off);
+      const auto ne = static_cast<std::int64_t>(m.corner_ent.size());
+      write_on_host(csr_ent_, ne, stage_, [&](std::int64_t* ent) {  // copied on the threads
+        for_each(HostExec{}, ne, [&](std::int64_t q) { ent[q] = m.corner_ent[q]; });
+      });
+      return;
+    }
     std::vector<std::int64_t>& off = csr_off_h_;
     off.assign(nv + 1, 0);
     auto next = [](std::int64_t& c) {
       return std::atomic_ref<std::int64_t>(c).fetch_add(1, std::memory_order_relaxed);
     };
     for_each(HostExec{}, nft, [&](std::int64_t t) {
-      for (int k = 0; k < 4; ++k) next(off[m.tets[t][k] + 1]);
+      for (int k = 0; k < 4; ++k)
+        if (m.tets[t][k] < nv) next(off[m.tets[t][k] + 1]);
     });
     std::partial_sum(off.begin(), off.end(), off.begin());
     const bool gids = static_cast<std::int64_t>(m.tet_gid.size()) == nt;
@@ -108,8 +122,9 @@ class QdemBackend final : public Backend {
     write_on_host(csr_ent_, off[nv], stage_, [&](std::int64_t* ent) {
       std::vector<std::int64_t> cur(off.begin(), off.end() - 1);
       for (int k = 0; k < 4; ++k)  // corner by corner: the lists come nearly sorted
-        for_each(HostExec{}, nft,
-                 [&](std::int64_t t) { ent[next(cur[m.tets[t][k]])] = k * nt + t; });
+        for_each(HostExec{}, nft, [&](std::int64_t t) {
+          if (m.tets[t][k] < nv) ent[next(cur[m.tets[t][k]])] = k * nt + t;
+        });
       for_each(HostExec{}, nv,
                [&](std::int64_t i) { std::sort(ent + off[i], ent + off[i + 1], before); });
     });

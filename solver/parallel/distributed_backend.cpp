@@ -1179,8 +1179,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
         if (ix_.contact_vertex[s.vertex[i]]) band[i] = &band_ranks(s.x[i]);
     auto other_ranks = [&](std::int64_t i, std::vector<int>& r) {
       const std::int64_t gv = s.vertex[i];
-      for (std::int64_t q = ix_.vt_off[gv]; q < ix_.vt_off[gv + 1]; ++q)
-        for (auto u : g.tets[ix_.vt[q]])
+      for (std::int64_t q = ix_.corner_off[4 * gv]; q < ix_.corner_off[4 * gv + 4]; ++q)
+        for (auto u : g.tets[ix_.corner_tet[q]])
           if (owner_[u] != me_) r.push_back(owner_[u]);
       if (band[i]) r.insert(r.end(), band[i]->begin(), band[i]->end());
       std::sort(r.begin(), r.end());

@@ -15,19 +15,6 @@ namespace qdemsph {
 
 namespace {
 
-// CSR of item -> list entries from (item, entry) incidences, entries in increasing order.
-template <class Visit>
-void build_csr(std::int64_t n_items, std::int64_t n_entries, Visit visit,
-               std::vector<std::int64_t>& off, std::vector<std::int32_t>& ent) {
-  off.assign(n_items + 1, 0);
-  for (std::int64_t e = 0; e < n_entries; ++e) visit(e, [&](std::int64_t i) { ++off[i + 1]; });
-  for (std::int64_t i = 0; i < n_items; ++i) off[i + 1] += off[i];
-  ent.assign(off[n_items], 0);
-  std::vector<std::int64_t> fill(off.begin(), off.end() - 1);
-  for (std::int64_t e = 0; e < n_entries; ++e)
-    visit(e, [&](std::int64_t i) { ent[fill[i]++] = static_cast<std::int32_t>(e); });
-}
-
 template <class T>
 std::int64_t find_sorted(const std::vector<T>& v, T x) {
   const auto it = std::lower_bound(v.begin(), v.end(), x);
@@ -41,12 +28,15 @@ constexpr std::uint64_t kIdMask = (std::uint64_t{1} << 60) - 1;
 ModelIndex index_model(const Model& g) {
   ModelIndex ix;
   const std::int64_t nv = g.n_vertices(), nft = g.n_free_tets;
-  build_csr(
-      nv, nft,
-      [&](std::int64_t t, auto add) {
-        for (int k = 0; k < 4; ++k) add(g.tets[t][k]);
-      },
-      ix.vt_off, ix.vt);
+  ix.corner_off.assign(4 * nv + 1, 0);
+  for (std::int64_t t = 0; t < nft; ++t)
+    for (int k = 0; k < 4; ++k) ++ix.corner_off[4 * g.tets[t][k] + k + 1];
+  std::partial_sum(ix.corner_off.begin(), ix.corner_off.end(), ix.corner_off.begin());
+  ix.corner_tet.resize(ix.corner_off.back());
+  std::vector<std::int64_t> fill(ix.corner_off.begin(), ix.corner_off.end() - 1);
+  for (std::int64_t t = 0; t < nft; ++t)
+    for (int k = 0; k < 4; ++k)
+      ix.corner_tet[fill[4 * g.tets[t][k] + k]++] = static_cast<std::int32_t>(t);
   ix.tets_at.assign(nv, 0);
   for (std::int64_t t = 0; t < nft; ++t)
     ++ix.tets_at[*std::min_element(g.tets[t].begin(), g.tets[t].end())];
@@ -162,8 +152,16 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   if (static_cast<std::int64_t>(x.size()) != nv || static_cast<std::int64_t>(v.size()) != nv)
     throw std::invalid_argument("build_local_model: x and v need one entry per listed vertex");
   Model& m = out.model;
-  std::vector<std::int32_t> g2l(g.n_vertices(), -1);
-  for (std::int64_t i = 0; i < nv; ++i) g2l[L.vertices[i]] = static_cast<std::int32_t>(i);
+  // Global -> local numbers (-1: not held), written in parallel into the kept arrays.
+  auto number = [](std::vector<std::int32_t>& to_local, std::int64_t n_global,
+                   const std::vector<std::int64_t>& held) {
+    resize_for_overwrite(to_local, static_cast<std::size_t>(n_global));
+    for_each(HostExec{}, n_global, [&](std::int64_t i) { to_local[i] = -1; });
+    for_each(HostExec{}, static_cast<std::int64_t>(held.size()),
+             [&](std::int64_t i) { to_local[held[i]] = static_cast<std::int32_t>(i); });
+  };
+  std::vector<std::int32_t>& g2l = out.vertex_local;
+  number(g2l, g.n_vertices(), L.vertices);
   auto local = [&](std::int64_t gid) {
     const std::int32_t l = g2l[gid];
     if (l < 0)
@@ -203,6 +201,36 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
     }
   });
   if (missing >= 0) local(missing);
+  // CSR offsets, counted in parallel.
+  auto offsets = [](std::int64_t n, std::vector<std::int64_t>& off, auto count) {
+    off.assign(n + 1, 0);
+    for_each(HostExec{}, n, [&](std::int64_t j) { off[j + 1] = count(j); });
+    std::partial_sum(off.begin(), off.end(), off.begin());
+  };
+  // The owned vertices' corner lists (Model::corner_off): the global lists by corner, each in
+  // tet gid order, renumbered (every free tet of an owned vertex is held), so in the one-rank
+  // order with no sort.
+  std::vector<std::int32_t>& tl = out.tet_local;
+  number(tl, g.n_tets(), L.tets);
+  const std::int64_t no = L.n_owned;
+  offsets(no, m.corner_off, [&](std::int64_t i) {
+    return ix.corner_off[4 * L.vertices[i] + 4] - ix.corner_off[4 * L.vertices[i]];
+  });
+  m.corner_ent.resize(m.corner_off[no]);
+  std::atomic<std::int64_t> unheld{-1};  // a tet of an owned vertex not held
+  for_each(HostExec{}, no, [&](std::int64_t i) {
+    const std::int64_t gv = L.vertices[i];
+    std::int64_t o = m.corner_off[i];
+    for (std::int64_t k = 0; k < 4; ++k)
+      for (std::int64_t q = ix.corner_off[4 * gv + k]; q < ix.corner_off[4 * gv + k + 1]; ++q) {
+        const std::int32_t t = tl[ix.corner_tet[q]];
+        if (t < 0) unheld.store(ix.corner_tet[q], std::memory_order_relaxed);
+        m.corner_ent[o++] = k * nt + t;
+      }
+  });
+  if (unheld >= 0)
+    throw std::logic_error("build_local_model: tet " + std::to_string(unheld) +
+                           " of an owned vertex is not in the layout");
   m.materials = g.materials;
   m.bodies = g.bodies;
   m.n_free_vertices = L.n_owned;
@@ -286,11 +314,6 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   collect(edge_l, edges);
   const auto nel = static_cast<std::int64_t>(edges.size());
   // The local lists, written in parallel (CSR offsets first).
-  auto offsets = [](std::int64_t n, std::vector<std::int64_t>& off, auto count) {
-    off.assign(n + 1, 0);
-    for_each(HostExec{}, n, [&](std::int64_t j) { off[j + 1] = count(j); });
-    std::partial_sum(off.begin(), off.end(), off.begin());
-  };
   auto lv = [&](std::int64_t gid) {  // local index; a missing vertex is recorded
     const std::int32_t l = g2l[gid];
     if (l < 0) missing.store(gid, std::memory_order_relaxed);

@@ -31,8 +31,11 @@ namespace qdemsph {
 
 // Lookups over the global model, built once per run on every rank.
 struct ModelIndex {
-  std::vector<std::int64_t> vt_off;  // vertex -> free tets containing it (CSR)
-  std::vector<std::int32_t> vt;
+  // Vertex -> free tets containing it, by corner: the tets whose corner k is vertex v at
+  // [corner_off[4 v + k], corner_off[4 v + k + 1]) of corner_tet, in increasing order (so the
+  // whole list of v, [corner_off[4 v], corner_off[4 v + 4]), holds each of its tets once).
+  std::vector<std::int64_t> corner_off;
+  std::vector<std::int32_t> corner_tet;
   std::vector<std::int32_t> tets_at;  // free tets whose smallest vertex id is this vertex
   std::vector<std::array<std::int32_t, 3>> tri_edges;  // surface triangle -> its edges
   std::vector<std::uint8_t> contact_vertex;            // a vertex of some contact primitive
@@ -79,6 +82,9 @@ class FeatureIds {
 struct LocalModel {
   Model model;
   FeatureIds ids;
+  // Global -> local numbers of the last build's vertices and tets (-1: not held), kept so
+  // that a rebuild writes them in place.
+  std::vector<std::int32_t> vertex_local, tet_local;
 };
 
 // The rank's Model. x and v are given for the listed vertices (ghost values may be stale:
