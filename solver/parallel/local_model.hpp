@@ -62,7 +62,9 @@ struct LocalLayout {
 class FeatureIds {
  public:
   std::vector<std::int64_t> vertex, triangle, edge;  // local -> global
-  void finish();                                     // builds the inverse lookups
+  // Global -> local, one entry per global vertex, triangle, edge (-1: not held): lookups in
+  // O(1) for a rebuild's history and every step's force shares, written where the lists are.
+  std::vector<std::int32_t> vertex_local, triangle_local, edge_local;
   std::uint64_t k1_to_global(std::uint64_t k1) const;
   std::uint64_t k2_to_global(std::uint64_t k1, std::uint64_t k2) const;
   // kNone when the feature is not held locally.
@@ -74,17 +76,14 @@ class FeatureIds {
   // the share names a feature or vertex this model lacks).
   ContactShare to_global(ContactShare s) const;
   ContactShare to_local(ContactShare s) const;
-
- private:
-  std::vector<std::pair<std::uint64_t, std::int64_t>> vertex_inv_;  // (global, local) sorted
 };
 
 struct LocalModel {
   Model model;
   FeatureIds ids;
-  // Global -> local numbers of the last build's vertices and tets (-1: not held), kept so
-  // that a rebuild writes them in place.
-  std::vector<std::int32_t> vertex_local, tet_local;
+  // Global -> local tet numbers of the last build (-1: not held), kept so that a rebuild
+  // writes them in place.
+  std::vector<std::int32_t> tet_local;
 };
 
 // The rank's Model. x and v are given for the listed vertices (ghost values may be stale:
