@@ -991,9 +991,12 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     // all free vertices).
     std::vector<int> dest(nsv);
     for_each(HostExec{}, nsv, [&](std::int64_t k) { dest[k] = dec_.owner(s.x[k]); });
-    std::vector<std::pair<std::int64_t, std::int64_t>> changed;
-    for (std::int64_t k = 0; k < nsv; ++k)
-      if (owner_[s.vertex[k]] != dest[k]) changed.push_back({s.vertex[k], dest[k]});
+    const std::vector<std::int64_t> moved = select_indices(
+        HostExec{}, nsv, [&](std::int64_t k) { return owner_[s.vertex[k]] != dest[k]; });
+    std::vector<std::pair<std::int64_t, std::int64_t>> changed(moved.size());
+    for_each(HostExec{}, static_cast<std::int64_t>(moved.size()), [&](std::int64_t j) {
+      changed[j] = {s.vertex[moved[j]], dest[moved[j]]};
+    });
     const auto all_changed = allgatherv(comm_, changed, &bytes);
     for (const auto& [gv, r] : all_changed) owner_[gv] = static_cast<std::int32_t>(r);
     if (all_changed.empty() && !always) {
@@ -1001,19 +1004,21 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       return;
     }
 
-    // Vertices: x, v, dissipation (and the force of the last evaluation when the slice has it,
-    // the relaxation start state while relaxing; a rank without them sends zeros).
+    // Vertices: id, x, v, dissipation (and the force of the last evaluation when the slice has
+    // it, the relaxation start state while relaxing; a rank without them sends zeros). The plans
+    // of the three migrations stand from one rebuild to the next (replanned: no new communicator
+    // or message buffers, page-locked on a GPU rank).
     const int has[2] = {!s.f.empty(), !s.x0.empty()};
     int any[2] = {0, 0};
     MPI_Allreduce(has, any, 2, MPI_INT, MPI_MAX, comm_);
     const bool any_f = any[0], any_relax = any[1];
-    std::vector<std::uint64_t> vg(s.vertex.begin(), s.vertex.end());
-    MigratePlan mv(comm_, dest, vg);
+    MigratePlan& mv = replanned(vertex_plan_, dest);
     const std::int64_t nn = mv.n_new();
+    std::vector<std::int64_t> gv(nn);
     std::vector<Vec3> x(nn), v(nn), f, x0, f0;
     std::vector<double> dv(nn);
-    std::vector<CommField> src{cfield(s.x), cfield(s.v), cfield(s.diss_v)},
-        dst{cfield(x), cfield(v), cfield(dv)};
+    std::vector<CommField> src{cfield(s.vertex), cfield(s.x), cfield(s.v), cfield(s.diss_v)},
+        dst{cfield(gv), cfield(x), cfield(v), cfield(dv)};
     std::vector<Vec3> zeros;  // made only when some field is missing here
     auto optional_field = [&](bool any_rank, const std::vector<Vec3>& from, std::vector<Vec3>& to) {
       if (!any_rank) return;
@@ -1029,13 +1034,18 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     bytes += mv.engine().last_bytes();
 
     // Tets: from their holder to every new owner of one of their vertices (each tet's ranks
-    // sorted, without repeats; counted, then written, in parallel).
+    // without repeats, in any order; counted, then written, in parallel).
     const std::int64_t nst = static_cast<std::int64_t>(s.tet.size());
     auto tet_ranks = [&](std::int64_t k, int* r) {
       const auto& tv = g_->tets[s.tet[k]];
-      for (int q = 0; q < 4; ++q) r[q] = owner_[tv[q]];
-      std::sort(r, r + 4);
-      return static_cast<std::int64_t>(std::unique(r, r + 4) - r);
+      std::int64_t n = 0;
+      for (int q = 0; q < 4; ++q) {
+        const int o = owner_[tv[q]];
+        bool seen = false;
+        for (std::int64_t j = 0; j < n; ++j) seen = seen || r[j] == o;
+        if (!seen) r[n++] = o;
+      }
+      return n;
     };
     std::vector<std::int64_t> toff(nst + 1, 0);
     for_each(HostExec{}, nst, [&](std::int64_t k) {
@@ -1049,7 +1059,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       const std::int64_t n = tet_ranks(k, r);
       std::copy(r, r + n, tranks.begin() + toff[k]);
     });
-    CommEngine te(comm_, toff, tranks, 0);
+    if (tet_plan_)
+      tet_plan_->replan(toff, tranks, 0);
+    else
+      tet_plan_ = std::make_unique<CommEngine>(comm_, toff, tranks, 0);
+    CommEngine& te = *tet_plan_;
     std::vector<std::int64_t> tg(te.n_recv());
     std::vector<double> td(te.n_recv());
     {
@@ -1061,18 +1075,18 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     // Contact history: to the new owner of the entry's anchor vertex, which evaluates it.
     const ContactState& sh = s.contact;
     const std::int64_t nsh = static_cast<std::int64_t>(sh.size());
-    std::vector<std::int64_t> hoff{0};
-    std::vector<int> hranks;
-    const GlobalVertices gv{owner_};
-    for (std::int64_t k = 0; k < nsh; ++k) {
-      const int a = anchor_slot(static_cast<int>(sh.k1[k] >> 60), sh.v[k].data(), gv);
-      if (a < 0) throw std::logic_error("contact history entry without a free vertex");
-      hranks.push_back(owner_[sh.v[k][a]]);
-      hoff.push_back(static_cast<std::int64_t>(hranks.size()));
-    }
-    CommEngine he(comm_, hoff, hranks, 0);
+    std::vector<int> hdest(nsh);
+    std::atomic<bool> unanchored{false};
+    for_each(HostExec{}, nsh, [&](std::int64_t k) {
+      const int a =
+          anchor_slot(static_cast<int>(sh.k1[k] >> 60), sh.v[k].data(), GlobalVertices{owner_});
+      if (a < 0) unanchored.store(true, std::memory_order_relaxed);
+      hdest[k] = a < 0 ? me_ : owner_[sh.v[k][a]];
+    });
+    if (unanchored) throw std::logic_error("contact history entry without a free vertex");
+    MigratePlan& he = replanned(history_plan_, hdest);
     ContactState hist;
-    hist.resize(he.n_recv());
+    hist.resize(he.n_new());
     hist.dissipated = sh.dissipated;  // the rank's share stays with the rank
     {
       const CommField a[10] = {cfield(sh.k1), cfield(sh.k2),     cfield(sh.active),   cfield(sh.xi),
@@ -1082,16 +1096,16 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
                                cfield(hist.xi),       cfield(hist.h),  cfield(hist.energy),
                                cfield(hist.energy_t), cfield(hist.v),  cfield(hist.w),
                                cfield(hist.n1)};
-      he.forward(a, b);
-      bytes += he.last_bytes();
+      he.move(a, b);
+      bytes += he.engine().last_bytes();
     }
     migrated_bytes_ += bytes;
 
     // The new owned vertices in gid order, so a rank's layout depends only on what it owns
     // (sorted and gathered in parallel); the tets as they came.
     StateSlice mine;
-    const std::vector<std::int64_t> perm = sorted_order(mv.new_gids());
-    mine.vertex = gathered<std::int64_t>(mv.new_gids(), perm);
+    const std::vector<std::int64_t> perm = sorted_order(gv);
+    mine.vertex = gathered<std::int64_t>(gv, perm);
     mine.x = gathered<Vec3>(x, perm);
     mine.v = gathered<Vec3>(v, perm);
     if (any_f) mine.f = gathered<Vec3>(f, perm);
@@ -1105,6 +1119,15 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     mine.contact = std::move(hist);
     part.reset();
     install(mine);
+  }
+
+  // `plan` planned for `dest` (made at the first migration, replanned after).
+  MigratePlan& replanned(std::unique_ptr<MigratePlan>& plan, std::span<const int> dest) {
+    if (plan)
+      plan->replan(dest);
+    else
+      plan = std::make_unique<MigratePlan>(comm_, dest);
+    return *plan;
   }
 
   // Builds the rank's part from its owned state (vertices in gid order, the state of every
@@ -1378,6 +1401,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   LocalModel lm_;  // the last layout's model, its storage reused by the next (install)
   std::vector<std::int32_t> tet_slot_;  // per free tet: its slot in install's slice (or stale)
   std::unique_ptr<HaloPlan> halo_;
+  // The rebuilds' migrations of vertices, tets and contact history (redistribute).
+  std::unique_ptr<MigratePlan> vertex_plan_, history_plan_;
+  std::unique_ptr<CommEngine> tet_plan_;
   bool contact_ = false, preload_ = false, relaxing_ = false;
   double band_ = 1, slack_ = 0;
   double reach_ = 0, slack0_ = 0;          // diam + D_DEM; the first slack (set_slack)
