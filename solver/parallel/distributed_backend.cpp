@@ -1012,24 +1012,30 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     int any[2] = {0, 0};
     MPI_Allreduce(has, any, 2, MPI_INT, MPI_MAX, comm_);
     const bool any_f = any[0], any_relax = any[1];
+    // What arrives (arrived_, then mine_ in gid order) goes into arrays kept from one rebuild
+    // to the next, as the tets' lists below: resized without zeroing or copying (a fresh array
+    // is zeroed on one thread), written on the threads.
+    auto fit = [](std::int64_t n, auto&... a) {
+      (resize_for_overwrite(a, static_cast<std::size_t>(n)), ...);
+    };
     MigratePlan& mv = replanned(vertex_plan_, dest);
     const std::int64_t nn = mv.n_new();
-    std::vector<std::int64_t> gv(nn);
-    std::vector<Vec3> x(nn), v(nn), f, x0, f0;
-    std::vector<double> dv(nn);
+    StateSlice& in = arrived_;
+    fit(nn, in.vertex, in.x, in.v, in.diss_v);
     std::vector<CommField> src{cfield(s.vertex), cfield(s.x), cfield(s.v), cfield(s.diss_v)},
-        dst{cfield(gv), cfield(x), cfield(v), cfield(dv)};
+        dst{cfield(in.vertex), cfield(in.x), cfield(in.v), cfield(in.diss_v)};
     std::vector<Vec3> zeros;  // made only when some field is missing here
     auto optional_field = [&](bool any_rank, const std::vector<Vec3>& from, std::vector<Vec3>& to) {
+      to.clear();
       if (!any_rank) return;
-      to.resize(nn);
+      fit(nn, to);
       if (from.empty()) zeros.resize(nsv);
       src.push_back(cfield(from.empty() ? zeros : from));
       dst.push_back(cfield(to));
     };
-    optional_field(any_f, s.f, f);
-    optional_field(any_relax, s.x0, x0);
-    optional_field(any_relax, s.f0, f0);
+    optional_field(any_f, s.f, in.f);
+    optional_field(any_relax, s.x0, in.x0);
+    optional_field(any_relax, s.f0, in.f0);
     mv.move(src, dst);
     bytes += mv.engine().last_bytes();
 
@@ -1047,13 +1053,16 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       }
       return n;
     };
-    std::vector<std::int64_t> toff(nst + 1, 0);
+    std::vector<std::int64_t>& toff = tet_off_;
+    fit(nst + 1, toff);
+    toff[0] = 0;
     for_each(HostExec{}, nst, [&](std::int64_t k) {
       int r[4];
       toff[k + 1] = tet_ranks(k, r);
     });
     std::partial_sum(toff.begin(), toff.end(), toff.begin());
-    std::vector<int> tranks(toff[nst]);
+    std::vector<int>& tranks = tet_ranks_;
+    fit(toff[nst], tranks);
     for_each(HostExec{}, nst, [&](std::int64_t k) {
       int r[4];
       const std::int64_t n = tet_ranks(k, r);
@@ -1064,10 +1073,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     else
       tet_plan_ = std::make_unique<CommEngine>(comm_, toff, tranks, 0);
     CommEngine& te = *tet_plan_;
-    std::vector<std::int64_t> tg(te.n_recv());
-    std::vector<double> td(te.n_recv());
+    StateSlice& mine = mine_;  // the tets as they come
+    fit(te.n_recv(), mine.tet, mine.diss_t);
     {
-      const CommField a[2] = {cfield(s.tet), cfield(s.diss_t)}, b[2] = {cfield(tg), cfield(td)};
+      const CommField a[2] = {cfield(s.tet), cfield(s.diss_t)},
+                      b[2] = {cfield(mine.tet), cfield(mine.diss_t)};
       te.forward(a, b);
       bytes += te.last_bytes();
     }
@@ -1085,7 +1095,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     });
     if (unanchored) throw std::logic_error("contact history entry without a free vertex");
     MigratePlan& he = replanned(history_plan_, hdest);
-    ContactState hist;
+    ContactState& hist = mine.contact;
     hist.resize(he.n_new());
     hist.dissipated = sh.dissipated;  // the rank's share stays with the rank
     {
@@ -1102,21 +1112,21 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     migrated_bytes_ += bytes;
 
     // The new owned vertices in gid order, so a rank's layout depends only on what it owns
-    // (sorted and gathered in parallel); the tets as they came.
-    StateSlice mine;
-    const std::vector<std::int64_t> perm = sorted_order(gv);
-    mine.vertex = gathered<std::int64_t>(gv, perm);
-    mine.x = gathered<Vec3>(x, perm);
-    mine.v = gathered<Vec3>(v, perm);
-    if (any_f) mine.f = gathered<Vec3>(f, perm);
-    mine.diss_v = gathered<double>(dv, perm);
-    if (any_relax) {
-      mine.x0 = gathered<Vec3>(x0, perm);
-      mine.f0 = gathered<Vec3>(f0, perm);
-    }
-    mine.tet = std::move(tg);
-    mine.diss_t = std::move(td);
-    mine.contact = std::move(hist);
+    // (sorted and gathered in parallel).
+    const std::vector<std::int64_t> perm = sorted_order(in.vertex);
+    gather_into(mine.vertex, in.vertex, perm);
+    gather_into(mine.x, in.x, perm);
+    gather_into(mine.v, in.v, perm);
+    gather_into(mine.diss_v, in.diss_v, perm);
+    auto optional_gather = [&](const std::vector<Vec3>& from, std::vector<Vec3>& to) {
+      if (from.empty())
+        to.clear();
+      else
+        gather_into(to, from, perm);
+    };
+    optional_gather(in.f, mine.f);
+    optional_gather(in.x0, mine.x0);
+    optional_gather(in.f0, mine.f0);
     part.reset();
     install(mine);
   }
@@ -1249,23 +1259,32 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       L.vertices.insert(L.vertices.end(), fixed.begin(), fixed.end());
     }
 
-    // Positions and velocities: owned from the state, ghosts from their owners.
+    // The state the backend gets (kept: a rebuild writes it in place, on the threads), with
+    // the positions and velocities the model is built from: owned from the slice, ghosts from
+    // their owners, fixed bodies' from the model.
     const std::int64_t nv = static_cast<std::int64_t>(L.vertices.size());
-    std::vector<Vec3> x(L.n_free), v(L.n_free);
-    std::copy(s.x.begin(), s.x.end(), x.begin());
-    std::copy(s.v.begin(), s.v.end(), v.begin());
+    const std::int64_t no = L.n_owned, nf = L.n_free, nsf = static_cast<std::int64_t>(s.f.size());
+    BackendState& st = installed_;
+    for (auto* a : {&st.x, &st.v, &st.f}) resize_for_overwrite(*a, nv);
+    resize_for_overwrite(st.diss_v, nv);
+    for_each(HostExec{}, nv, [&](std::int64_t i) {
+      const bool fixed = i >= nf;
+      if (i < no || fixed) {
+        st.x[i] = fixed ? g.x[L.vertices[i]] : s.x[i];
+        st.v[i] = fixed ? g.v[L.vertices[i]] : s.v[i];
+      }
+      // A rebuild's slice has no forces: compute_forces evaluates them next.
+      st.f[i] = i < nsf ? s.f[i] : Vec3{};
+      st.diss_v[i] = i < no ? s.diss_v[i] : 0.0;
+    });
     {
-      const CommField f[2] = {comm_field(x), comm_field(v)};
+      const CommField f[2] = {comm_field(st.x), comm_field(st.v)};
       halo_->gather_begin(f);
       halo_->gather_finish(f);
     }
-    for (std::int64_t i = L.n_free; i < nv; ++i) {
-      x.push_back(g.x[L.vertices[i]]);
-      v.push_back(g.v[L.vertices[i]]);
-    }
     {
       auto s1 = timers_.scope("migration.layout.model");
-      build_local_model(g, ix_, L, x, v, lm_);
+      build_local_model(g, ix_, L, st.x, st.v, lm_);
     }
     part.reset();
     part.emplace(timers_, "migration.upload");
@@ -1282,18 +1301,15 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       local_->upload(lm_.model);
     }
     local_->use_preload(preload_);
-    BackendState st;
-    st.x = lm_.model.x;
-    st.v = lm_.model.v;
-    st.f.assign(nv, Vec3{});  // empty in the slice: the next compute_forces evaluates them
-    std::copy(s.f.begin(), s.f.end(), st.f.begin());
-    st.diss_v.assign(nv, 0.0);
-    std::copy(s.diss_v.begin(), s.diss_v.end(), st.diss_v.begin());
+    st.x0.clear();
+    st.f0.clear();
     if (!s.x0.empty()) {
-      st.x0.assign(nv, Vec3{});
-      st.f0.assign(nv, Vec3{});
-      std::copy(s.x0.begin(), s.x0.end(), st.x0.begin());
-      std::copy(s.f0.begin(), s.f0.end(), st.f0.begin());
+      resize_for_overwrite(st.x0, nv);
+      resize_for_overwrite(st.f0, nv);
+      for_each(HostExec{}, nv, [&](std::int64_t i) {
+        st.x0[i] = i < no ? s.x0[i] : Vec3{};
+        st.f0[i] = i < no ? s.f0[i] : Vec3{};
+      });
     }
     // Each held tet's dissipation from its slot in the slice, found by gid in tet_slot_ (its
     // entries of tets the slice lacks are stale, so a hit is checked).
@@ -1301,7 +1317,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     tet_slot_.resize(g.n_free_tets);
     for_each(HostExec{}, nst,
              [&](std::int64_t k) { tet_slot_[s.tet[k]] = static_cast<std::int32_t>(k); });
-    st.diss_t.resize(L.tets.size());
+    resize_for_overwrite(st.diss_t, L.tets.size());
     std::atomic<std::int64_t> missing{-1};  // a held tet whose state did not arrive
     for_each(HostExec{}, static_cast<std::int64_t>(L.tets.size()), [&](std::int64_t j) {
       const std::int64_t k = tet_slot_[L.tets[j]];
@@ -1400,6 +1416,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   FeatureIds ids_;
   LocalModel lm_;  // the last layout's model, its storage reused by the next (install)
   std::vector<std::int32_t> tet_slot_;  // per free tet: its slot in install's slice (or stale)
+  BackendState installed_;              // the state install hands the backend (storage kept)
+  StateSlice arrived_, mine_;          // redistribute's migrated state, as it came and in gid order
+  std::vector<std::int64_t> tet_off_;  // ... each tet's destination ranks (CSR)
+  std::vector<int> tet_ranks_;
   std::unique_ptr<HaloPlan> halo_;
   // The rebuilds' migrations of vertices, tets and contact history (redistribute).
   std::unique_ptr<MigratePlan> vertex_plan_, history_plan_;
