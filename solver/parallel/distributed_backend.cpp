@@ -1213,8 +1213,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     auto other_ranks = [&](std::int64_t i, std::vector<int>& r) {
       const std::int64_t gv = s.vertex[i];
       for (std::int64_t q = ix_.corner_off[4 * gv]; q < ix_.corner_off[4 * gv + 4]; ++q)
-        for (auto u : g.tets[ix_.corner_tet[q]])
-          if (owner_[u] != me_) r.push_back(owner_[u]);
+        if (cls[ix_.corner_tet[q]] != kInterior)  // else all its vertices are this rank's
+          for (auto u : g.tets[ix_.corner_tet[q]])
+            if (owner_[u] != me_) r.push_back(owner_[u]);
       if (band[i]) r.insert(r.end(), band[i]->begin(), band[i]->end());
       std::sort(r.begin(), r.end());
       r.erase(std::unique(r.begin(), r.end()), r.end());
