@@ -48,9 +48,9 @@ class QdemBackend final : public Backend {
     fc_.resize(0);
     fext_.assign(m.fext);
     fpre_.assign(m.fpre);
-    mass_.assign(m.mass);
-    inv_mass_.assign(m.inv_mass);
-    relax_inv_mass_.assign(m.relax_inv_mass);
+    assign_on_threads(mass_, m.mass, stage_);
+    assign_on_threads(inv_mass_, m.inv_mass, stage_);
+    assign_on_threads(relax_inv_mass_, m.relax_inv_mass, stage_);
     const std::int64_t nv = nv_, nt = nt_;
     write_on_host(held_, nv, stage_, [&](std::uint8_t* held) {
       for_each(HostExec{}, nv, [&](std::int64_t i) { held[i] = held_components(m.flags[i]); });
@@ -69,10 +69,10 @@ class QdemBackend final : public Backend {
           for (int c = 0; c < 3; ++c) dxi[(3 * r + c) * nt + t] = m.dX_inv[t].m[r][c];
       });
     });
-    vol0_.assign(m.vol0);
-    tmat_.assign(m.tet_material);
+    assign_on_threads(vol0_, m.vol0, stage_);
+    assign_on_threads(tmat_, m.tet_material, stage_);
     mats_.assign(m.materials);
-    tf_.resize(4 * nt_);
+    tf_.resize_for_overwrite(4 * nt_);  // element_forces writes every corner it gathers
     diss_t_.resize(nt_);
     upload_corner_lists(m);
     flag_.resize(1);
@@ -97,11 +97,8 @@ class QdemBackend final : public Backend {
       if (static_cast<std::int64_t>(m.corner_off.size()) != nv + 1 ||
           static_cast<std::int64_t>(m.corner_ent.size()) != m.corner_off.back())
         throw std::logic_error("model corner lists do not fit its free vertices");
-      csr_off_.assign(m.corner_off);
-      const auto ne = static_cast<std::int64_t>(m.corner_ent.size());
-      write_on_host(csr_ent_, ne, stage_, [&](std::int64_t* ent) {  // copied on the threads
-        for_each(HostExec{}, ne, [&](std::int64_t q) { ent[q] = m.corner_ent[q]; });
-      });
+      assign_on_threads(csr_off_, m.corner_off, stage_);
+      assign_on_threads(csr_ent_, m.corner_ent, stage_);
       return;
     }
     std::vector<std::int64_t>& off = csr_off_h_;
