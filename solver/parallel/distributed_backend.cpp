@@ -1169,47 +1169,56 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     L.n_interior = held.start[kBoundary];
     L.n_home = held.start[kHalo];
 
-    // Contact band: the cells holding this rank's owned contact vertices, published to all.
+    // Contact band: the cells holding this rank's owned contact vertices, published to all;
+    // each vertex's cell and the distinct cells in key order found on the threads (a key per
+    // vertex, a radix sort).
     std::unordered_map<std::uint64_t, std::vector<int>> occupied;  // cell -> other ranks
     std::vector<std::uint64_t> my_cells;
-    n_contact_owned_ = 0;
+    std::vector<std::int64_t> contacts;                         // owned contact vertices
+    std::vector<std::pair<std::uint64_t, std::int64_t>> keyed;  // (cell, entry of contacts)
     if (contact_) {
-      for (std::int64_t i = 0; i < L.n_owned; ++i)
-        if (ix_.contact_vertex[s.vertex[i]]) {
-          my_cells.push_back(cell_key(s.x[i]));
-          ++n_contact_owned_;
-        }
-      std::sort(my_cells.begin(), my_cells.end());
-      my_cells.erase(std::unique(my_cells.begin(), my_cells.end()), my_cells.end());
-      std::vector<std::pair<std::uint64_t, std::int64_t>> mine;
-      for (auto c : my_cells) mine.push_back({c, me_});
+      contacts = select_indices(HostExec{}, L.n_owned, [&](std::int64_t i) {
+        return ix_.contact_vertex[s.vertex[i]] != 0;
+      });
+      const auto nc = static_cast<std::int64_t>(contacts.size());
+      keyed.resize(nc);
+      for_each(HostExec{}, nc, [&](std::int64_t j) { keyed[j] = {cell_key(s.x[contacts[j]]), j}; });
+      std::vector<std::pair<std::uint64_t, std::int64_t>> scratch;
+      radix_sort(keyed, scratch);
+      const std::vector<std::int64_t> first = select_indices(HostExec{}, nc, [&](std::int64_t p) {
+        return p == 0 || keyed[p].first != keyed[p - 1].first;
+      });
+      my_cells.resize(first.size());
+      for_each(HostExec{}, static_cast<std::int64_t>(first.size()),
+               [&](std::int64_t q) { my_cells[q] = keyed[first[q]].first; });
+      std::vector<std::pair<std::uint64_t, std::int64_t>> mine(my_cells.size());
+      for (std::size_t q = 0; q < my_cells.size(); ++q) mine[q] = {my_cells[q], me_};
       for (const auto& [c, r] : allgatherv(comm_, mine))
         if (r != me_) occupied[c].push_back(static_cast<int>(r));
     }
-    std::unordered_map<std::uint64_t, std::vector<int>> near;  // cell -> ranks within the band
-    auto band_ranks = [&](Vec3 p) -> const std::vector<int>& {
-      const BandCell c = band_cell(p, band_);
-      const std::uint64_t key = band_key(c.i[0], c.i[1], c.i[2]);
-      auto it = near.find(key);
-      if (it != near.end()) return it->second;
-      std::vector<int> r;
-      for_each_band_neighbour(c, [&](std::uint64_t k) {
+    n_contact_owned_ = static_cast<std::int64_t>(contacts.size());
+    // The ranks with owned contact vertices within the band of each of these cells (other
+    // ranks' cells among its 5^3), sorted without repeats, a cell per thread at a time.
+    std::vector<std::vector<int>> near(my_cells.size());
+    for_each(HostExec{}, static_cast<std::int64_t>(my_cells.size()), [&](std::int64_t q) {
+      std::vector<int>& r = near[q];  // allocates only beside another rank's cells
+      for_each_band_neighbour(band_cell_of_key(my_cells[q]), [&](std::uint64_t k) {
         const auto o = occupied.find(k);
         if (o != occupied.end()) r.insert(r.end(), o->second.begin(), o->second.end());
       });
       std::sort(r.begin(), r.end());
       r.erase(std::unique(r.begin(), r.end()), r.end());
-      return near.emplace(key, std::move(r)).first->second;
-    };
+    });
 
     // Halo: an owned vertex goes to the owners of its tets' other vertices (they hold those
     // tets) and, for contact vertices, to the ranks with owned contact vertices in the band.
     // Each vertex's list is sorted, without this rank and repeats (what HaloPlan keeps),
-    // counted then written in parallel; the band's lists come first (cached per cell).
+    // counted then written in parallel; the band's lists come first (per cell).
     std::vector<const std::vector<int>*> band(L.n_owned, nullptr);
-    if (contact_)
-      for (std::int64_t i = 0; i < L.n_owned; ++i)
-        if (ix_.contact_vertex[s.vertex[i]]) band[i] = &band_ranks(s.x[i]);
+    for_each(HostExec{}, static_cast<std::int64_t>(keyed.size()), [&](std::int64_t p) {
+      const auto q = std::lower_bound(my_cells.begin(), my_cells.end(), keyed[p].first);
+      band[contacts[keyed[p].second]] = &near[q - my_cells.begin()];
+    });
     auto other_ranks = [&](std::int64_t i, std::vector<int>& r) {
       const std::int64_t gv = s.vertex[i];
       for (std::int64_t q = ix_.corner_off[4 * gv]; q < ix_.corner_off[4 * gv + 4]; ++q)
