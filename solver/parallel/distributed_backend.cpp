@@ -1427,8 +1427,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   LocalModel lm_;  // the last layout's model, its storage reused by the next (install)
   std::vector<std::int32_t> tet_slot_;  // per free tet: its slot in install's slice (or stale)
   BackendState installed_;              // the state install hands the backend (storage kept)
-  StateSlice arrived_, mine_;          // redistribute's migrated state, as it came and in gid order
-  std::vector<std::int64_t> tet_off_;  // ... each tet's destination ranks (CSR)
+  // redistribute's work arrays: the migrated state as it came and in gid order, and each tet's
+  // destination ranks (CSR).
+  StateSlice arrived_, mine_;
+  std::vector<std::int64_t> tet_off_;
   std::vector<int> tet_ranks_;
   std::unique_ptr<HaloPlan> halo_;
   // The rebuilds' migrations of vertices, tets and contact history (redistribute).
