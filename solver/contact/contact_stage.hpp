@@ -297,15 +297,16 @@ class ContactStage {
     upload_columns(edge_tri_, c.edge_tri);
     upload_columns(prim_v_, c.prim_v);
     tri_n_.resize(ntri_);
-    tri_body_.assign(c.tri_body);
-    prim_body_.assign(c.prim_body);
-    own_v_off_.assign(c.own_v_off);
-    own_e_off_.assign(c.own_e_off);
-    own_v_.assign(c.own_v);
-    own_e_.assign(c.own_e);
-    prim_tri_off_.assign(c.prim_tri_off);
-    prim_tri_.assign(c.prim_tri);
-    wall_v_.assign(c.wall_vertices);
+    // The per-feature lists on the threads (through the page-locked staging for a device).
+    assign_on_threads(tri_body_, c.tri_body, stage_);
+    assign_on_threads(prim_body_, c.prim_body, stage_);
+    assign_on_threads(own_v_off_, c.own_v_off, stage_);
+    assign_on_threads(own_e_off_, c.own_e_off, stage_);
+    assign_on_threads(own_v_, c.own_v, stage_);
+    assign_on_threads(own_e_, c.own_e, stage_);
+    assign_on_threads(prim_tri_off_, c.prim_tri_off, stage_);
+    assign_on_threads(prim_tri_, c.prim_tri, stage_);
+    assign_on_threads(wall_v_, c.wall_vertices, stage_);
     body_h_.assign(c.body_h);
     body_fixed_.assign(std::vector<std::int32_t>(c.body_fixed.begin(), c.body_fixed.end()));
     body_mat_.assign(c.body_mat);
@@ -324,13 +325,13 @@ class ContactStage {
     write_on_host(wall_kn_, nw, stage_, [&](double* wk) {
       for (std::int64_t w = 0; w < nw; ++w) wk[w] = c.walls[w].stiffness;
     });
-    vertex_body_.assign(m.body);
+    assign_on_threads(vertex_body_, m.body, stage_);
     const std::int64_t nv = nv_;
     write_on_host(vgid_, nv, stage_, [&](std::uint64_t* g) {
       const bool ids = static_cast<std::int64_t>(m.gid.size()) == nv;  // else numbered by index
       for_each(HostExec{}, nv, [&](std::int64_t i) { g[i] = ids ? m.gid[i] : i; });
     });
-    inv_mass_.assign(m.inv_mass);
+    assign_on_threads(inv_mass_, m.inv_mass, stage_);
     // Free vertices first (Evaluator): [0, nfv) owned, [nfv, nfree) other ranks' (ghosts).
     nfree_ = nfv_;
     while (nfree_ < nv_ && !c.body_fixed[m.body[nfree_]]) ++nfree_;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "core/hd.hpp"
 #include "core/memory.hpp"
@@ -48,6 +49,16 @@ double reduce_max(HostExec, std::int64_t n, F f, double init) {
 template <class F>
 void reduce_max_to(HostExec, std::int64_t n, F f, double init, double* out) {
   *out = reduce_max(HostExec{}, n, f, init);
+}
+
+// b <- h on the host's threads (write_on_host): in place for a host buffer, through `stage`
+// (page-locked on a GPU rank: one copy at the link's speed) for a device. For a model's large
+// arrays, which Buffer::assign copies on one thread, or from pageable memory to a device.
+template <class T>
+void assign_on_threads(Buffer<T>& b, const std::vector<T>& h, StagingBytes& stage) {
+  const auto n = static_cast<std::int64_t>(h.size());
+  write_on_host(b, n, stage,
+                [&](T* out) { for_each(HostExec{}, n, [&](std::int64_t i) { out[i] = h[i]; }); });
 }
 
 }  // namespace qdemsph

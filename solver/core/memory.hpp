@@ -250,8 +250,8 @@ class StagingBytes {
 // GPU rank they are page-locked (the copy runs at the link's speed).
 template <class T, class Write>
 void write_on_host(Buffer<T>& b, std::int64_t n, StagingBytes& stage, Write write) {
+  b.resize_for_overwrite(n);  // first: staging allocated after a device allocation is pinned
   if (b.space() == Space::Host) {
-    b.resize_for_overwrite(n);
     write(b.view().p);
     return;
   }

@@ -80,12 +80,21 @@ std::vector<std::int64_t> sorted_order(const std::vector<K>& keys) {
   return order;
 }
 
+// out[i] = in[order[i]] for every i, into the caller's array (kept by a caller that gathers
+// again: resized without zeroing, written on the threads).
+template <class Out, class T>
+void gather_into(std::vector<Out>& out, const std::vector<T>& in,
+                 const std::vector<std::int64_t>& order) {
+  const auto n = static_cast<std::int64_t>(order.size());
+  resize_for_overwrite(out, order.size());
+  for_each(HostExec{}, n, [&](std::int64_t i) { out[i] = static_cast<Out>(in[order[i]]); });
+}
+
 // in[order[i]] for every i, as type Out.
 template <class Out, class T>
 std::vector<Out> gathered(const std::vector<T>& in, const std::vector<std::int64_t>& order) {
-  std::vector<Out> out(order.size());
-  for_each(HostExec{}, static_cast<std::int64_t>(order.size()),
-           [&](std::int64_t i) { out[i] = static_cast<Out>(in[order[i]]); });
+  std::vector<Out> out;
+  gather_into(out, in, order);
   return out;
 }
 

@@ -14,6 +14,7 @@
 #include <atomic>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
 
 #include "contact/contact_stage.hpp"
 #include "core/error.hpp"
@@ -47,9 +48,9 @@ class QdemBackend final : public Backend {
     fc_.resize(0);
     fext_.assign(m.fext);
     fpre_.assign(m.fpre);
-    mass_.assign(m.mass);
-    inv_mass_.assign(m.inv_mass);
-    relax_inv_mass_.assign(m.relax_inv_mass);
+    assign_on_threads(mass_, m.mass, stage_);
+    assign_on_threads(inv_mass_, m.inv_mass, stage_);
+    assign_on_threads(relax_inv_mass_, m.relax_inv_mass, stage_);
     const std::int64_t nv = nv_, nt = nt_;
     write_on_host(held_, nv, stage_, [&](std::uint8_t* held) {
       for_each(HostExec{}, nv, [&](std::int64_t i) { held[i] = held_components(m.flags[i]); });
@@ -68,10 +69,10 @@ class QdemBackend final : public Backend {
           for (int c = 0; c < 3; ++c) dxi[(3 * r + c) * nt + t] = m.dX_inv[t].m[r][c];
       });
     });
-    vol0_.assign(m.vol0);
-    tmat_.assign(m.tet_material);
+    assign_on_threads(vol0_, m.vol0, stage_);
+    assign_on_threads(tmat_, m.tet_material, stage_);
     mats_.assign(m.materials);
-    tf_.resize(4 * nt_);
+    tf_.resize_for_overwrite(4 * nt_);  // element_forces writes every corner it gathers
     diss_t_.resize(nt_);
     upload_corner_lists(m);
     flag_.resize(1);
@@ -83,21 +84,31 @@ class QdemBackend final : public Backend {
     }
   }
 
-  // Vertex -> (corner k, tet t) list, entries k * nt + t, ordered by (k, global tet id): on one
-  // rank that is increasing order; a rank of a distributed run sums the corners of its vertices
-  // in the same order, so forces agree with one rank bit for bit. Built in parallel: counted and
-  // filled through atomic cursors (in any order), then each vertex's entries sorted (unique
-  // keys: the lists do not depend on the threads). (A model without tet ids, e.g. a benchmark's,
-  // is numbered by index.)
+  // Vertex -> (corner k, tet t) lists of the gathered vertices [0, nfv), entries k * nt + t,
+  // ordered by (k, global tet id): on one rank that is increasing order; a rank of a distributed
+  // run sums the corners of its vertices in the same order, so forces agree with one rank bit for
+  // bit. The model's own lists when it has them (a distributed rank's part, Model::corner_off),
+  // else built here in parallel: counted and filled through atomic cursors (in any order), then
+  // each vertex's entries sorted (unique keys: the lists do not depend on the threads). (A model
+  // without tet ids, e.g. a benchmark's, is numbered by index.)
   void upload_corner_lists(const Model& m) {
-    const std::int64_t nv = nv_, nt = nt_, nft = nft_;
+    const std::int64_t nv = nfv_, nt = nt_, nft = nft_;
+    if (!m.corner_off.empty()) {
+      if (static_cast<std::int64_t>(m.corner_off.size()) != nv + 1 ||
+          static_cast<std::int64_t>(m.corner_ent.size()) != m.corner_off.back())
+        throw std::logic_error("model corner lists do not fit its free vertices");
+      assign_on_threads(csr_off_, m.corner_off, stage_);
+      assign_on_threads(csr_ent_, m.corner_ent, stage_);
+      return;
+    }
     std::vector<std::int64_t>& off = csr_off_h_;
     off.assign(nv + 1, 0);
     auto next = [](std::int64_t& c) {
       return std::atomic_ref<std::int64_t>(c).fetch_add(1, std::memory_order_relaxed);
     };
     for_each(HostExec{}, nft, [&](std::int64_t t) {
-      for (int k = 0; k < 4; ++k) next(off[m.tets[t][k] + 1]);
+      for (int k = 0; k < 4; ++k)
+        if (m.tets[t][k] < nv) next(off[m.tets[t][k] + 1]);
     });
     std::partial_sum(off.begin(), off.end(), off.begin());
     const bool gids = static_cast<std::int64_t>(m.tet_gid.size()) == nt;
@@ -108,8 +119,9 @@ class QdemBackend final : public Backend {
     write_on_host(csr_ent_, off[nv], stage_, [&](std::int64_t* ent) {
       std::vector<std::int64_t> cur(off.begin(), off.end() - 1);
       for (int k = 0; k < 4; ++k)  // corner by corner: the lists come nearly sorted
-        for_each(HostExec{}, nft,
-                 [&](std::int64_t t) { ent[next(cur[m.tets[t][k]])] = k * nt + t; });
+        for_each(HostExec{}, nft, [&](std::int64_t t) {
+          if (m.tets[t][k] < nv) ent[next(cur[m.tets[t][k]])] = k * nt + t;
+        });
       for_each(HostExec{}, nv,
                [&](std::int64_t i) { std::sort(ent + off[i], ent + off[i + 1], before); });
     });

@@ -55,6 +55,12 @@ struct Model {
   std::vector<double> vol0;
   std::vector<std::int32_t> tet_material;
   std::vector<std::uint64_t> tet_gid;
+  // Vertex -> tet corners of the vertices the backend gathers forces for, [0, n_free_vertices):
+  // CSR (n_free_vertices + 1 offsets), entry k * n_tets() + t for corner k of tet t, each
+  // vertex's in (k, tet gid) order, the order its corner forces are summed in. Optional: a
+  // model without them gets them built at upload (QdemBackend::upload_corner_lists); a rank's
+  // part of a distributed model has them from the global model's (build_local_model).
+  std::vector<std::int64_t> corner_off, corner_ent;
   // Surface triangles (global vertex ids), with the owning body.
   std::vector<SurfaceTriangle> surface;
   std::vector<std::int32_t> surface_body;

@@ -1008,9 +1008,12 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     // all free vertices).
     std::vector<int> dest(nsv);
     for_each(HostExec{}, nsv, [&](std::int64_t k) { dest[k] = dec_.owner(s.x[k]); });
-    std::vector<std::pair<std::int64_t, std::int64_t>> changed;
-    for (std::int64_t k = 0; k < nsv; ++k)
-      if (owner_[s.vertex[k]] != dest[k]) changed.push_back({s.vertex[k], dest[k]});
+    const std::vector<std::int64_t> moved = select_indices(
+        HostExec{}, nsv, [&](std::int64_t k) { return owner_[s.vertex[k]] != dest[k]; });
+    std::vector<std::pair<std::int64_t, std::int64_t>> changed(moved.size());
+    for_each(HostExec{}, static_cast<std::int64_t>(moved.size()), [&](std::int64_t j) {
+      changed[j] = {s.vertex[moved[j]], dest[moved[j]]};
+    });
     const auto all_changed = allgatherv(comm_, changed, &bytes);
     for (const auto& [gv, r] : all_changed) owner_[gv] = static_cast<std::int32_t>(r);
     if (all_changed.empty() && !always) {
@@ -1018,59 +1021,80 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       return;
     }
 
-    // Vertices: x, v, dissipation (and the force of the last evaluation when the slice has it,
-    // the relaxation start state while relaxing; a rank without them sends zeros).
+    // Vertices: id, x, v, dissipation (and the force of the last evaluation when the slice has
+    // it, the relaxation start state while relaxing; a rank without them sends zeros). The plans
+    // of the three migrations stand from one rebuild to the next (replanned: no new communicator
+    // or message buffers, page-locked on a GPU rank).
     const int has[2] = {!s.f.empty(), !s.x0.empty()};
     int any[2] = {0, 0};
     MPI_Allreduce(has, any, 2, MPI_INT, MPI_MAX, comm_);
     const bool any_f = any[0], any_relax = any[1];
-    std::vector<std::uint64_t> vg(s.vertex.begin(), s.vertex.end());
-    MigratePlan mv(comm_, dest, vg);
+    // What arrives (arrived_, then mine_ in gid order) goes into arrays kept from one rebuild
+    // to the next, as the tets' lists below: resized without zeroing or copying (a fresh array
+    // is zeroed on one thread), written on the threads.
+    auto fit = [](std::int64_t n, auto&... a) {
+      (resize_for_overwrite(a, static_cast<std::size_t>(n)), ...);
+    };
+    MigratePlan& mv = replanned(vertex_plan_, dest);
     const std::int64_t nn = mv.n_new();
-    std::vector<Vec3> x(nn), v(nn), f, x0, f0;
-    std::vector<double> dv(nn);
-    std::vector<CommField> src{cfield(s.x), cfield(s.v), cfield(s.diss_v)},
-        dst{cfield(x), cfield(v), cfield(dv)};
+    StateSlice& in = arrived_;
+    fit(nn, in.vertex, in.x, in.v, in.diss_v);
+    std::vector<CommField> src{cfield(s.vertex), cfield(s.x), cfield(s.v), cfield(s.diss_v)},
+        dst{cfield(in.vertex), cfield(in.x), cfield(in.v), cfield(in.diss_v)};
     std::vector<Vec3> zeros;  // made only when some field is missing here
     auto optional_field = [&](bool any_rank, const std::vector<Vec3>& from, std::vector<Vec3>& to) {
+      to.clear();
       if (!any_rank) return;
-      to.resize(nn);
+      fit(nn, to);
       if (from.empty()) zeros.resize(nsv);
       src.push_back(cfield(from.empty() ? zeros : from));
       dst.push_back(cfield(to));
     };
-    optional_field(any_f, s.f, f);
-    optional_field(any_relax, s.x0, x0);
-    optional_field(any_relax, s.f0, f0);
+    optional_field(any_f, s.f, in.f);
+    optional_field(any_relax, s.x0, in.x0);
+    optional_field(any_relax, s.f0, in.f0);
     mv.move(src, dst);
     bytes += mv.engine().last_bytes();
 
     // Tets: from their holder to every new owner of one of their vertices (each tet's ranks
-    // sorted, without repeats; counted, then written, in parallel).
+    // without repeats, in any order; counted, then written, in parallel).
     const std::int64_t nst = static_cast<std::int64_t>(s.tet.size());
     auto tet_ranks = [&](std::int64_t k, int* r) {
       const auto& tv = g_->tets[s.tet[k]];
-      for (int q = 0; q < 4; ++q) r[q] = owner_[tv[q]];
-      std::sort(r, r + 4);
-      return static_cast<std::int64_t>(std::unique(r, r + 4) - r);
+      std::int64_t n = 0;
+      for (int q = 0; q < 4; ++q) {
+        const int o = owner_[tv[q]];
+        bool seen = false;
+        for (std::int64_t j = 0; j < n; ++j) seen = seen || r[j] == o;
+        if (!seen) r[n++] = o;
+      }
+      return n;
     };
-    std::vector<std::int64_t> toff(nst + 1, 0);
+    std::vector<std::int64_t>& toff = tet_off_;
+    fit(nst + 1, toff);
+    toff[0] = 0;
     for_each(HostExec{}, nst, [&](std::int64_t k) {
       int r[4];
       toff[k + 1] = tet_ranks(k, r);
     });
     std::partial_sum(toff.begin(), toff.end(), toff.begin());
-    std::vector<int> tranks(toff[nst]);
+    std::vector<int>& tranks = tet_ranks_;
+    fit(toff[nst], tranks);
     for_each(HostExec{}, nst, [&](std::int64_t k) {
       int r[4];
       const std::int64_t n = tet_ranks(k, r);
       std::copy(r, r + n, tranks.begin() + toff[k]);
     });
-    CommEngine te(comm_, toff, tranks, 0);
-    std::vector<std::int64_t> tg(te.n_recv());
-    std::vector<double> td(te.n_recv());
+    if (tet_plan_)
+      tet_plan_->replan(toff, tranks, 0);
+    else
+      tet_plan_ = std::make_unique<CommEngine>(comm_, toff, tranks, 0);
+    CommEngine& te = *tet_plan_;
+    StateSlice& mine = mine_;  // the tets as they come
+    fit(te.n_recv(), mine.tet, mine.diss_t);
     {
-      const CommField a[2] = {cfield(s.tet), cfield(s.diss_t)}, b[2] = {cfield(tg), cfield(td)};
+      const CommField a[2] = {cfield(s.tet), cfield(s.diss_t)},
+                      b[2] = {cfield(mine.tet), cfield(mine.diss_t)};
       te.forward(a, b);
       bytes += te.last_bytes();
     }
@@ -1078,18 +1102,18 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     // Contact history: to the new owner of the entry's anchor vertex, which evaluates it.
     const ContactState& sh = s.contact;
     const std::int64_t nsh = static_cast<std::int64_t>(sh.size());
-    std::vector<std::int64_t> hoff{0};
-    std::vector<int> hranks;
-    const GlobalVertices gv{owner_};
-    for (std::int64_t k = 0; k < nsh; ++k) {
-      const int a = anchor_slot(static_cast<int>(sh.k1[k] >> 60), sh.v[k].data(), gv);
-      if (a < 0) throw std::logic_error("contact history entry without a free vertex");
-      hranks.push_back(owner_[sh.v[k][a]]);
-      hoff.push_back(static_cast<std::int64_t>(hranks.size()));
-    }
-    CommEngine he(comm_, hoff, hranks, 0);
-    ContactState hist;
-    hist.resize(he.n_recv());
+    std::vector<int> hdest(nsh);
+    std::atomic<bool> unanchored{false};
+    for_each(HostExec{}, nsh, [&](std::int64_t k) {
+      const int a =
+          anchor_slot(static_cast<int>(sh.k1[k] >> 60), sh.v[k].data(), GlobalVertices{owner_});
+      if (a < 0) unanchored.store(true, std::memory_order_relaxed);
+      hdest[k] = a < 0 ? me_ : owner_[sh.v[k][a]];
+    });
+    if (unanchored) throw std::logic_error("contact history entry without a free vertex");
+    MigratePlan& he = replanned(history_plan_, hdest);
+    ContactState& hist = mine.contact;
+    hist.resize(he.n_new());
     hist.dissipated = sh.dissipated;  // the rank's share stays with the rank
     {
       const CommField a[10] = {cfield(sh.k1), cfield(sh.k2),     cfield(sh.active),   cfield(sh.xi),
@@ -1099,29 +1123,38 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
                                cfield(hist.xi),       cfield(hist.h),  cfield(hist.energy),
                                cfield(hist.energy_t), cfield(hist.v),  cfield(hist.w),
                                cfield(hist.n1)};
-      he.forward(a, b);
-      bytes += he.last_bytes();
+      he.move(a, b);
+      bytes += he.engine().last_bytes();
     }
     migrated_bytes_ += bytes;
 
     // The new owned vertices in gid order, so a rank's layout depends only on what it owns
-    // (sorted and gathered in parallel); the tets as they came.
-    StateSlice mine;
-    const std::vector<std::int64_t> perm = sorted_order(mv.new_gids());
-    mine.vertex = gathered<std::int64_t>(mv.new_gids(), perm);
-    mine.x = gathered<Vec3>(x, perm);
-    mine.v = gathered<Vec3>(v, perm);
-    if (any_f) mine.f = gathered<Vec3>(f, perm);
-    mine.diss_v = gathered<double>(dv, perm);
-    if (any_relax) {
-      mine.x0 = gathered<Vec3>(x0, perm);
-      mine.f0 = gathered<Vec3>(f0, perm);
-    }
-    mine.tet = std::move(tg);
-    mine.diss_t = std::move(td);
-    mine.contact = std::move(hist);
+    // (sorted and gathered in parallel).
+    const std::vector<std::int64_t> perm = sorted_order(in.vertex);
+    gather_into(mine.vertex, in.vertex, perm);
+    gather_into(mine.x, in.x, perm);
+    gather_into(mine.v, in.v, perm);
+    gather_into(mine.diss_v, in.diss_v, perm);
+    auto optional_gather = [&](const std::vector<Vec3>& from, std::vector<Vec3>& to) {
+      if (from.empty())
+        to.clear();
+      else
+        gather_into(to, from, perm);
+    };
+    optional_gather(in.f, mine.f);
+    optional_gather(in.x0, mine.x0);
+    optional_gather(in.f0, mine.f0);
     part.reset();
     install(mine);
+  }
+
+  // `plan` planned for `dest` (made at the first migration, replanned after).
+  MigratePlan& replanned(std::unique_ptr<MigratePlan>& plan, std::span<const int> dest) {
+    if (plan)
+      plan->replan(dest);
+    else
+      plan = std::make_unique<MigratePlan>(comm_, dest);
+    return *plan;
   }
 
   // Builds the rank's part from its owned state (vertices in gid order, the state of every
@@ -1153,52 +1186,62 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     L.n_interior = held.start[kBoundary];
     L.n_home = held.start[kHalo];
 
-    // Contact band: the cells holding this rank's owned contact vertices, published to all.
+    // Contact band: the cells holding this rank's owned contact vertices, published to all;
+    // each vertex's cell and the distinct cells in key order found on the threads (a key per
+    // vertex, a radix sort).
     std::unordered_map<std::uint64_t, std::vector<int>> occupied;  // cell -> other ranks
     std::vector<std::uint64_t> my_cells;
-    n_contact_owned_ = 0;
+    std::vector<std::int64_t> contacts;                         // owned contact vertices
+    std::vector<std::pair<std::uint64_t, std::int64_t>> keyed;  // (cell, entry of contacts)
     if (contact_) {
-      for (std::int64_t i = 0; i < L.n_owned; ++i)
-        if (ix_.contact_vertex[s.vertex[i]]) {
-          my_cells.push_back(cell_key(s.x[i]));
-          ++n_contact_owned_;
-        }
-      std::sort(my_cells.begin(), my_cells.end());
-      my_cells.erase(std::unique(my_cells.begin(), my_cells.end()), my_cells.end());
-      std::vector<std::pair<std::uint64_t, std::int64_t>> mine;
-      for (auto c : my_cells) mine.push_back({c, me_});
+      contacts = select_indices(HostExec{}, L.n_owned, [&](std::int64_t i) {
+        return ix_.contact_vertex[s.vertex[i]] != 0;
+      });
+      const auto nc = static_cast<std::int64_t>(contacts.size());
+      keyed.resize(nc);
+      for_each(HostExec{}, nc, [&](std::int64_t j) { keyed[j] = {cell_key(s.x[contacts[j]]), j}; });
+      std::vector<std::pair<std::uint64_t, std::int64_t>> scratch;
+      radix_sort(keyed, scratch);
+      const std::vector<std::int64_t> first = select_indices(HostExec{}, nc, [&](std::int64_t p) {
+        return p == 0 || keyed[p].first != keyed[p - 1].first;
+      });
+      my_cells.resize(first.size());
+      for_each(HostExec{}, static_cast<std::int64_t>(first.size()),
+               [&](std::int64_t q) { my_cells[q] = keyed[first[q]].first; });
+      std::vector<std::pair<std::uint64_t, std::int64_t>> mine(my_cells.size());
+      for (std::size_t q = 0; q < my_cells.size(); ++q) mine[q] = {my_cells[q], me_};
       for (const auto& [c, r] : allgatherv(comm_, mine))
         if (r != me_) occupied[c].push_back(static_cast<int>(r));
     }
-    std::unordered_map<std::uint64_t, std::vector<int>> near;  // cell -> ranks within the band
-    auto band_ranks = [&](Vec3 p) -> const std::vector<int>& {
-      const BandCell c = band_cell(p, band_);
-      const std::uint64_t key = band_key(c.i[0], c.i[1], c.i[2]);
-      auto it = near.find(key);
-      if (it != near.end()) return it->second;
-      std::vector<int> r;
-      for_each_band_neighbour(c, [&](std::uint64_t k) {
+    n_contact_owned_ = static_cast<std::int64_t>(contacts.size());
+    // The ranks with owned contact vertices within the band of each of these cells (other
+    // ranks' cells among its 5^3), sorted without repeats, a cell per thread at a time.
+    std::vector<std::vector<int>> near(my_cells.size());
+    for_each(HostExec{}, static_cast<std::int64_t>(my_cells.size()), [&](std::int64_t q) {
+      std::vector<int>& r = near[q];  // allocates only beside another rank's cells
+      for_each_band_neighbour(band_cell_of_key(my_cells[q]), [&](std::uint64_t k) {
         const auto o = occupied.find(k);
         if (o != occupied.end()) r.insert(r.end(), o->second.begin(), o->second.end());
       });
       std::sort(r.begin(), r.end());
       r.erase(std::unique(r.begin(), r.end()), r.end());
-      return near.emplace(key, std::move(r)).first->second;
-    };
+    });
 
     // Halo: an owned vertex goes to the owners of its tets' other vertices (they hold those
     // tets) and, for contact vertices, to the ranks with owned contact vertices in the band.
     // Each vertex's list is sorted, without this rank and repeats (what HaloPlan keeps),
-    // counted then written in parallel; the band's lists come first (cached per cell).
+    // counted then written in parallel; the band's lists come first (per cell).
     std::vector<const std::vector<int>*> band(L.n_owned, nullptr);
-    if (contact_)
-      for (std::int64_t i = 0; i < L.n_owned; ++i)
-        if (ix_.contact_vertex[s.vertex[i]]) band[i] = &band_ranks(s.x[i]);
+    for_each(HostExec{}, static_cast<std::int64_t>(keyed.size()), [&](std::int64_t p) {
+      const auto q = std::lower_bound(my_cells.begin(), my_cells.end(), keyed[p].first);
+      band[contacts[keyed[p].second]] = &near[q - my_cells.begin()];
+    });
     auto other_ranks = [&](std::int64_t i, std::vector<int>& r) {
       const std::int64_t gv = s.vertex[i];
-      for (std::int64_t q = ix_.vt_off[gv]; q < ix_.vt_off[gv + 1]; ++q)
-        for (auto u : g.tets[ix_.vt[q]])
-          if (owner_[u] != me_) r.push_back(owner_[u]);
+      for (std::int64_t q = ix_.corner_off[4 * gv]; q < ix_.corner_off[4 * gv + 4]; ++q)
+        if (cls[ix_.corner_tet[q]] != kInterior)  // else all its vertices are this rank's
+          for (auto u : g.tets[ix_.corner_tet[q]])
+            if (owner_[u] != me_) r.push_back(owner_[u]);
       if (band[i]) r.insert(r.end(), band[i]->begin(), band[i]->end());
       std::sort(r.begin(), r.end());
       r.erase(std::unique(r.begin(), r.end()), r.end());
@@ -1243,23 +1286,32 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       L.vertices.insert(L.vertices.end(), fixed.begin(), fixed.end());
     }
 
-    // Positions and velocities: owned from the state, ghosts from their owners.
+    // The state the backend gets (kept: a rebuild writes it in place, on the threads), with
+    // the positions and velocities the model is built from: owned from the slice, ghosts from
+    // their owners, fixed bodies' from the model.
     const std::int64_t nv = static_cast<std::int64_t>(L.vertices.size());
-    std::vector<Vec3> x(L.n_free), v(L.n_free);
-    std::copy(s.x.begin(), s.x.end(), x.begin());
-    std::copy(s.v.begin(), s.v.end(), v.begin());
+    const std::int64_t no = L.n_owned, nf = L.n_free, nsf = static_cast<std::int64_t>(s.f.size());
+    BackendState& st = installed_;
+    for (auto* a : {&st.x, &st.v, &st.f}) resize_for_overwrite(*a, nv);
+    resize_for_overwrite(st.diss_v, nv);
+    for_each(HostExec{}, nv, [&](std::int64_t i) {
+      const bool fixed = i >= nf;
+      if (i < no || fixed) {
+        st.x[i] = fixed ? g.x[L.vertices[i]] : s.x[i];
+        st.v[i] = fixed ? g.v[L.vertices[i]] : s.v[i];
+      }
+      // A rebuild's slice has no forces: compute_forces evaluates them next.
+      st.f[i] = i < nsf ? s.f[i] : Vec3{};
+      st.diss_v[i] = i < no ? s.diss_v[i] : 0.0;
+    });
     {
-      const CommField f[2] = {comm_field(x), comm_field(v)};
+      const CommField f[2] = {comm_field(st.x), comm_field(st.v)};
       halo_->gather_begin(f);
       halo_->gather_finish(f);
     }
-    for (std::int64_t i = L.n_free; i < nv; ++i) {
-      x.push_back(g.x[L.vertices[i]]);
-      v.push_back(g.v[L.vertices[i]]);
-    }
     {
       auto s1 = timers_.scope("migration.layout.model");
-      build_local_model(g, ix_, L, x, v, lm_);
+      build_local_model(g, ix_, L, st.x, st.v, lm_);
     }
     part.reset();
     part.emplace(timers_, "migration.upload");
@@ -1276,18 +1328,15 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       local_->upload(lm_.model);
     }
     local_->use_preload(preload_);
-    BackendState st;
-    st.x = lm_.model.x;
-    st.v = lm_.model.v;
-    st.f.assign(nv, Vec3{});  // empty in the slice: the next compute_forces evaluates them
-    std::copy(s.f.begin(), s.f.end(), st.f.begin());
-    st.diss_v.assign(nv, 0.0);
-    std::copy(s.diss_v.begin(), s.diss_v.end(), st.diss_v.begin());
+    st.x0.clear();
+    st.f0.clear();
     if (!s.x0.empty()) {
-      st.x0.assign(nv, Vec3{});
-      st.f0.assign(nv, Vec3{});
-      std::copy(s.x0.begin(), s.x0.end(), st.x0.begin());
-      std::copy(s.f0.begin(), s.f0.end(), st.f0.begin());
+      resize_for_overwrite(st.x0, nv);
+      resize_for_overwrite(st.f0, nv);
+      for_each(HostExec{}, nv, [&](std::int64_t i) {
+        st.x0[i] = i < no ? s.x0[i] : Vec3{};
+        st.f0[i] = i < no ? s.f0[i] : Vec3{};
+      });
     }
     // Each held tet's dissipation from its slot in the slice, found by gid in tet_slot_ (its
     // entries of tets the slice lacks are stale, so a hit is checked).
@@ -1295,7 +1344,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     tet_slot_.resize(g.n_free_tets);
     for_each(HostExec{}, nst,
              [&](std::int64_t k) { tet_slot_[s.tet[k]] = static_cast<std::int32_t>(k); });
-    st.diss_t.resize(L.tets.size());
+    resize_for_overwrite(st.diss_t, L.tets.size());
     std::atomic<std::int64_t> missing{-1};  // a held tet whose state did not arrive
     for_each(HostExec{}, static_cast<std::int64_t>(L.tets.size()), [&](std::int64_t j) {
       const std::int64_t k = tet_slot_[L.tets[j]];
@@ -1394,7 +1443,16 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   FeatureIds ids_;
   LocalModel lm_;  // the last layout's model, its storage reused by the next (install)
   std::vector<std::int32_t> tet_slot_;  // per free tet: its slot in install's slice (or stale)
+  BackendState installed_;              // the state install hands the backend (storage kept)
+  // redistribute's work arrays: the migrated state as it came and in gid order, and each tet's
+  // destination ranks (CSR).
+  StateSlice arrived_, mine_;
+  std::vector<std::int64_t> tet_off_;
+  std::vector<int> tet_ranks_;
   std::unique_ptr<HaloPlan> halo_;
+  // The rebuilds' migrations of vertices, tets and contact history (redistribute).
+  std::unique_ptr<MigratePlan> vertex_plan_, history_plan_;
+  std::unique_ptr<CommEngine> tet_plan_;
   bool contact_ = false, preload_ = false, relaxing_ = false;
   double band_ = 1, slack_ = 0;
   double reach_ = 0, slack0_ = 0;          // diam + D_DEM; the first slack (set_slack)

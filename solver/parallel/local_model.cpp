@@ -8,30 +8,15 @@
 
 #include "contact/contact_record.hpp"
 #include "core/exec_host.hpp"
-#include "core/radix_sort.hpp"
 #include "core/select_host.hpp"
 
 namespace qdemsph {
 
 namespace {
 
-// CSR of item -> list entries from (item, entry) incidences, entries in increasing order.
-template <class Visit>
-void build_csr(std::int64_t n_items, std::int64_t n_entries, Visit visit,
-               std::vector<std::int64_t>& off, std::vector<std::int32_t>& ent) {
-  off.assign(n_items + 1, 0);
-  for (std::int64_t e = 0; e < n_entries; ++e) visit(e, [&](std::int64_t i) { ++off[i + 1]; });
-  for (std::int64_t i = 0; i < n_items; ++i) off[i + 1] += off[i];
-  ent.assign(off[n_items], 0);
-  std::vector<std::int64_t> fill(off.begin(), off.end() - 1);
-  for (std::int64_t e = 0; e < n_entries; ++e)
-    visit(e, [&](std::int64_t i) { ent[fill[i]++] = static_cast<std::int32_t>(e); });
-}
-
-template <class T>
-std::int64_t find_sorted(const std::vector<T>& v, T x) {
-  const auto it = std::lower_bound(v.begin(), v.end(), x);
-  return it != v.end() && *it == x ? it - v.begin() : -1;
+// A global id's local number in a global -> local array (-1: not held, or past its end).
+std::int64_t local_of(const std::vector<std::int32_t>& to_local, std::int64_t gid) {
+  return gid >= 0 && gid < static_cast<std::int64_t>(to_local.size()) ? to_local[gid] : -1;
 }
 
 constexpr std::uint64_t kIdMask = (std::uint64_t{1} << 60) - 1;
@@ -41,12 +26,15 @@ constexpr std::uint64_t kIdMask = (std::uint64_t{1} << 60) - 1;
 ModelIndex index_model(const Model& g) {
   ModelIndex ix;
   const std::int64_t nv = g.n_vertices(), nft = g.n_free_tets;
-  build_csr(
-      nv, nft,
-      [&](std::int64_t t, auto add) {
-        for (int k = 0; k < 4; ++k) add(g.tets[t][k]);
-      },
-      ix.vt_off, ix.vt);
+  ix.corner_off.assign(4 * nv + 1, 0);
+  for (std::int64_t t = 0; t < nft; ++t)
+    for (int k = 0; k < 4; ++k) ++ix.corner_off[4 * g.tets[t][k] + k + 1];
+  std::partial_sum(ix.corner_off.begin(), ix.corner_off.end(), ix.corner_off.begin());
+  ix.corner_tet.resize(ix.corner_off.back());
+  std::vector<std::int64_t> fill(ix.corner_off.begin(), ix.corner_off.end() - 1);
+  for (std::int64_t t = 0; t < nft; ++t)
+    for (int k = 0; k < 4; ++k)
+      ix.corner_tet[fill[4 * g.tets[t][k] + k]++] = static_cast<std::int32_t>(t);
   ix.tets_at.assign(nv, 0);
   for (std::int64_t t = 0; t < nft; ++t)
     ++ix.tets_at[*std::min_element(g.tets[t].begin(), g.tets[t].end())];
@@ -78,20 +66,8 @@ ModelIndex index_model(const Model& g) {
   return ix;
 }
 
-void FeatureIds::finish() {
-  const auto n = static_cast<std::int64_t>(vertex.size());
-  vertex_inv_.resize(n);
-  for_each(HostExec{}, n, [&](std::int64_t i) { vertex_inv_[i] = {vertex[i], i}; });
-  std::vector<std::pair<std::uint64_t, std::int64_t>> scratch;
-  radix_sort(vertex_inv_, scratch);  // unique global ids
-}
-
 std::int64_t FeatureIds::local_vertex(std::int64_t gid) const {
-  if (gid < 0) return -1;
-  const auto g = static_cast<std::uint64_t>(gid);
-  const auto it = std::lower_bound(vertex_inv_.begin(), vertex_inv_.end(),
-                                   std::pair<std::uint64_t, std::int64_t>{g, -1});
-  return it != vertex_inv_.end() && it->first == g ? it->second : -1;
+  return local_of(vertex_local, gid);
 }
 
 // Vertex features are keyed by global id already (ContactTopology::vgid): only edges and
@@ -112,7 +88,7 @@ std::uint64_t FeatureIds::k2_to_global(std::uint64_t k1, std::uint64_t k2) const
 std::uint64_t FeatureIds::k1_to_local(std::uint64_t k1) const {
   const int type = static_cast<int>(k1 >> 60);
   const std::int64_t id = static_cast<std::int64_t>(k1 & kIdMask);
-  const std::int64_t l = type == kEdgeEdge ? find_sorted(edge, id) : local_vertex(id);
+  const std::int64_t l = type == kEdgeEdge ? local_of(edge_local, id) : local_vertex(id);
   if (l < 0) return kNone;
   return type == kEdgeEdge ? contact_key1(type, static_cast<std::uint64_t>(l)) : k1;
 }
@@ -121,7 +97,7 @@ std::uint64_t FeatureIds::k2_to_local(std::uint64_t k1, std::uint64_t k2) const 
   const int type = static_cast<int>(k1 >> 60);
   if (type == kWall) return k2;
   const std::int64_t l =
-      find_sorted(type == kPointFace ? triangle : edge, static_cast<std::int64_t>(k2));
+      local_of(type == kPointFace ? triangle_local : edge_local, static_cast<std::int64_t>(k2));
   return l < 0 ? kNone : static_cast<std::uint64_t>(l);
 }
 
@@ -154,7 +130,9 @@ LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLa
   return out;
 }
 
-// Every array of `out` is overwritten whole (resized, then written), never appended to.
+// Every array of `out` is overwritten whole (resized, then written), never appended to; an
+// array that must grow takes 1/8 more room (resize_for_overwrite), as a rank's part grows and
+// shrinks a little from one layout to the next, and nothing of its old contents is copied.
 void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& L,
                        const std::vector<Vec3>& x, const std::vector<Vec3>& v, LocalModel& out,
                        bool with_contact) {
@@ -162,8 +140,20 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   if (static_cast<std::int64_t>(x.size()) != nv || static_cast<std::int64_t>(v.size()) != nv)
     throw std::invalid_argument("build_local_model: x and v need one entry per listed vertex");
   Model& m = out.model;
-  std::vector<std::int32_t> g2l(g.n_vertices(), -1);
-  for (std::int64_t i = 0; i < nv; ++i) g2l[L.vertices[i]] = static_cast<std::int32_t>(i);
+  FeatureIds& ids = out.ids;
+  auto fit = [](std::int64_t n, auto&... a) {
+    (resize_for_overwrite(a, static_cast<std::size_t>(n)), ...);
+  };
+  // Global -> local numbers (-1: not held), written in parallel into the kept arrays.
+  auto number = [&](std::vector<std::int32_t>& to_local, std::int64_t n_global,
+                    const std::vector<std::int64_t>& held) {
+    fit(n_global, to_local);
+    for_each(HostExec{}, n_global, [&](std::int64_t i) { to_local[i] = -1; });
+    for_each(HostExec{}, static_cast<std::int64_t>(held.size()),
+             [&](std::int64_t i) { to_local[held[i]] = static_cast<std::int32_t>(i); });
+  };
+  const std::vector<std::int32_t>& g2l = ids.vertex_local;
+  number(ids.vertex_local, g.n_vertices(), L.vertices);
   auto local = [&](std::int64_t gid) {
     const std::int32_t l = g2l[gid];
     if (l < 0)
@@ -171,38 +161,71 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
                              " of a held item is not in the layout");
     return l;
   };
-  // Per-item copies from the global model, in parallel.
-  auto gather = [](const auto& from, const std::vector<std::int64_t>& idx, auto& to) {
-    to.resize(idx.size());
-    for_each(HostExec{}, static_cast<std::int64_t>(idx.size()),
-             [&](std::int64_t i) { to[i] = from[idx[i]]; });
-  };
-  gather(g.X, L.vertices, m.X);
-  gather(g.fext, L.vertices, m.fext);
-  gather(g.fpre, L.vertices, m.fpre);
-  gather(g.mass, L.vertices, m.mass);
-  gather(g.inv_mass, L.vertices, m.inv_mass);
-  gather(g.relax_inv_mass, L.vertices, m.relax_inv_mass);
-  gather(g.flags, L.vertices, m.flags);
-  gather(g.gid, L.vertices, m.gid);
-  gather(g.body, L.vertices, m.body);
-  m.x = x;
-  m.v = v;
-  gather(g.dX_inv, L.tets, m.dX_inv);
-  gather(g.vol0, L.tets, m.vol0);
-  gather(g.tet_material, L.tets, m.tet_material);
-  gather(g.tet_gid, L.tets, m.tet_gid);
+  // Per-vertex and per-tet copies from the global model, one parallel pass each.
+  fit(nv, m.X, m.x, m.v, m.fext, m.fpre, m.mass, m.inv_mass, m.relax_inv_mass, m.flags, m.gid,
+      m.body, ids.vertex);
+  for_each(HostExec{}, nv, [&](std::int64_t i) {
+    const std::int64_t gv = L.vertices[i];
+    m.X[i] = g.X[gv];
+    m.x[i] = x[i];
+    m.v[i] = v[i];
+    m.fext[i] = g.fext[gv];
+    m.fpre[i] = g.fpre[gv];
+    m.mass[i] = g.mass[gv];
+    m.inv_mass[i] = g.inv_mass[gv];
+    m.relax_inv_mass[i] = g.relax_inv_mass[gv];
+    m.flags[i] = g.flags[gv];
+    m.gid[i] = g.gid[gv];
+    m.body[i] = g.body[gv];
+    ids.vertex[i] = gv;
+  });
   const std::int64_t nt = static_cast<std::int64_t>(L.tets.size());
-  m.tets.resize(nt);
-  std::atomic<std::int64_t> missing{-1};  // a vertex of a held tet not in the layout
+  fit(nt, m.tets, m.dX_inv, m.vol0, m.tet_material, m.tet_gid);
+  std::atomic<std::int64_t> missing{-1};  // a vertex of a held item not in the layout
   for_each(HostExec{}, nt, [&](std::int64_t j) {
+    const std::int64_t t = L.tets[j];
     for (int k = 0; k < 4; ++k) {
-      const std::int64_t gi = g.tets[L.tets[j]][k];
+      const std::int32_t gi = g.tets[t][k];
       m.tets[j][k] = g2l[gi];
       if (g2l[gi] < 0) missing.store(gi, std::memory_order_relaxed);
     }
+    m.dX_inv[j] = g.dX_inv[t];
+    m.vol0[j] = g.vol0[t];
+    m.tet_material[j] = g.tet_material[t];
+    m.tet_gid[j] = g.tet_gid[t];
   });
   if (missing >= 0) local(missing);
+  // CSR offsets, counted in parallel.
+  auto offsets = [&](std::int64_t n, std::vector<std::int64_t>& off, auto count) {
+    fit(n + 1, off);
+    off[0] = 0;
+    for_each(HostExec{}, n, [&](std::int64_t j) { off[j + 1] = count(j); });
+    std::partial_sum(off.begin(), off.end(), off.begin());
+  };
+  // The owned vertices' corner lists (Model::corner_off): the global lists by corner, each in
+  // tet gid order, renumbered (every free tet of an owned vertex is held), so in the one-rank
+  // order with no sort.
+  std::vector<std::int32_t>& tl = out.tet_local;
+  number(tl, g.n_tets(), L.tets);
+  const std::int64_t no = L.n_owned;
+  offsets(no, m.corner_off, [&](std::int64_t i) {
+    return ix.corner_off[4 * L.vertices[i] + 4] - ix.corner_off[4 * L.vertices[i]];
+  });
+  fit(m.corner_off[no], m.corner_ent);
+  std::atomic<std::int64_t> unheld{-1};  // a tet of an owned vertex not held
+  for_each(HostExec{}, no, [&](std::int64_t i) {
+    const std::int64_t gv = L.vertices[i];
+    std::int64_t o = m.corner_off[i];
+    for (std::int64_t k = 0; k < 4; ++k)
+      for (std::int64_t q = ix.corner_off[4 * gv + k]; q < ix.corner_off[4 * gv + k + 1]; ++q) {
+        const std::int32_t t = tl[ix.corner_tet[q]];
+        if (t < 0) unheld.store(ix.corner_tet[q], std::memory_order_relaxed);
+        m.corner_ent[o++] = k * nt + t;
+      }
+  });
+  if (unheld >= 0)
+    throw std::logic_error("build_local_model: tet " + std::to_string(unheld) +
+                           " of an owned vertex is not in the layout");
   m.materials = g.materials;
   m.bodies = g.bodies;
   m.n_free_vertices = L.n_owned;
@@ -213,7 +236,6 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   m.relax_dt = g.relax_dt;
   m.dt_critical = g.dt_critical;
   m.dt_critical_tet = g.dt_critical_tet;
-  out.ids.vertex = L.vertices;
 
   const ContactModel& gc = g.contact;
   ContactModel& c = m.contact;
@@ -221,9 +243,10 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
     c = ContactModel{};
     c.mode = gc.mode;
     c.n_surface_tets = gc.n_surface_tets;
-    out.ids.triangle.clear();
-    out.ids.edge.clear();
-    out.ids.finish();
+    ids.triangle.clear();
+    ids.edge.clear();
+    ids.triangle_local.clear();
+    ids.edge_local.clear();
     return;
   }
   c.mode = gc.mode;
@@ -249,17 +272,18 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   // Primitives with every vertex local, in global order (free bodies first): each global
   // primitive tested in parallel, the kept ones collected in order.
   const std::int64_t ngp = static_cast<std::int64_t>(gc.prim_v.size());
-  std::vector<std::uint8_t> keep(ngp);
-  for_each(HostExec{}, ngp, [&](std::int64_t p) {
+  const std::vector<std::int64_t> prims = select_indices(HostExec{}, ngp, [&](std::int64_t p) {
     bool all = true;
     for (int k = 0; k < 4; ++k) all = all && (gc.prim_v[p][k] < 0 || g2l[gc.prim_v[p][k]] >= 0);
-    keep[p] = all;
+    return all;
   });
-  const std::vector<std::int64_t> prims =
-      select_indices(HostExec{}, ngp, [&](std::int64_t p) { return keep[p] != 0; });
   const auto npl = static_cast<std::int64_t>(prims.size());
   // Their triangles and the triangles' edges, in global order (marked, then collected), and
-  // global -> local numbers (-1: not held).
+  // global -> local numbers (-1: not held), in the ids' kept arrays.
+  auto clear = [&](std::vector<std::int32_t>& marks, std::int64_t n) {
+    fit(n, marks);
+    for_each(HostExec{}, n, [&](std::int64_t e) { marks[e] = 0; });
+  };
   auto mark = [](std::int32_t& m) {
     std::atomic_ref<std::int32_t>(m).store(1, std::memory_order_relaxed);
   };
@@ -270,40 +294,36 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
     for_each(HostExec{}, static_cast<std::int64_t>(out.size()),
              [&](std::int64_t j) { marks[out[j]] = static_cast<std::int32_t>(j); });
   };
-  std::vector<std::int64_t>& tris = out.ids.triangle;
-  std::vector<std::int32_t> tri_l(gc.tri_v.size(), 0);
+  std::vector<std::int64_t>& tris = ids.triangle;
+  std::vector<std::int32_t>& tri_l = ids.triangle_local;
+  clear(tri_l, static_cast<std::int64_t>(gc.tri_v.size()));
   for_each(HostExec{}, npl, [&](std::int64_t j) {
     for (std::int64_t q = gc.prim_tri_off[prims[j]]; q < gc.prim_tri_off[prims[j] + 1]; ++q)
       mark(tri_l[gc.prim_tri[q]]);
   });
   collect(tri_l, tris);
   const auto ntl = static_cast<std::int64_t>(tris.size());
-  std::vector<std::int64_t>& edges = out.ids.edge;
-  std::vector<std::int32_t> edge_l(gc.edges.size(), 0);
+  std::vector<std::int64_t>& edges = ids.edge;
+  std::vector<std::int32_t>& edge_l = ids.edge_local;
+  clear(edge_l, static_cast<std::int64_t>(gc.edges.size()));
   for_each(HostExec{}, ntl, [&](std::int64_t j) {
     for (int q = 0; q < 3; ++q) mark(edge_l[ix.tri_edges[tris[j]][q]]);
   });
   collect(edge_l, edges);
   const auto nel = static_cast<std::int64_t>(edges.size());
   // The local lists, written in parallel (CSR offsets first).
-  auto offsets = [](std::int64_t n, std::vector<std::int64_t>& off, auto count) {
-    off.assign(n + 1, 0);
-    for_each(HostExec{}, n, [&](std::int64_t j) { off[j + 1] = count(j); });
-    std::partial_sum(off.begin(), off.end(), off.begin());
-  };
   auto lv = [&](std::int64_t gid) {  // local index; a missing vertex is recorded
     const std::int32_t l = g2l[gid];
     if (l < 0) missing.store(gid, std::memory_order_relaxed);
     return l;
   };
-  c.tri_v.resize(ntl);
-  c.tri_body.resize(ntl);
+  fit(ntl, c.tri_v, c.tri_body);
   offsets(ntl, c.own_v_off,
           [&](std::int64_t j) { return gc.own_v_off[tris[j] + 1] - gc.own_v_off[tris[j]]; });
   offsets(ntl, c.own_e_off,
           [&](std::int64_t j) { return gc.own_e_off[tris[j] + 1] - gc.own_e_off[tris[j]]; });
-  c.own_v.resize(c.own_v_off[ntl]);
-  c.own_e.resize(c.own_e_off[ntl]);
+  fit(c.own_v_off[ntl], c.own_v);
+  fit(c.own_e_off[ntl], c.own_e);
   for_each(HostExec{}, ntl, [&](std::int64_t j) {
     const std::int64_t s = tris[j];
     c.tri_v[j] = {lv(gc.tri_v[s][0]), lv(gc.tri_v[s][1]), lv(gc.tri_v[s][2])};
@@ -315,8 +335,7 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
     for (std::int64_t q = gc.own_e_off[s]; q < gc.own_e_off[s + 1]; ++q)
       c.own_e[o++] = edge_l[gc.own_e[q]];
   });
-  c.edges.resize(nel);
-  c.edge_tri.resize(nel);
+  fit(nel, c.edges, c.edge_tri);
   for_each(HostExec{}, nel, [&](std::int64_t j) {
     const std::int64_t e = edges[j];
     // Endpoints keep the global order (edge-edge geometry is evaluated a0 -> a1).
@@ -324,12 +343,11 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
     for (int k = 0; k < 2; ++k)
       c.edge_tri[j][k] = gc.edge_tri[e][k] >= 0 ? tri_l[gc.edge_tri[e][k]] : -1;
   });
-  c.prim_v.resize(npl);
-  c.prim_body.resize(npl);
+  fit(npl, c.prim_v, c.prim_body);
   offsets(npl, c.prim_tri_off, [&](std::int64_t j) {
     return gc.prim_tri_off[prims[j] + 1] - gc.prim_tri_off[prims[j]];
   });
-  c.prim_tri.resize(c.prim_tri_off[npl]);
+  fit(c.prim_tri_off[npl], c.prim_tri);
   for_each(HostExec{}, npl, [&](std::int64_t j) {
     const std::int64_t p = prims[j];
     for (int k = 0; k < 4; ++k) c.prim_v[j][k] = gc.prim_v[p][k] >= 0 ? lv(gc.prim_v[p][k]) : -1;
@@ -345,7 +363,6 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   const std::vector<std::int64_t> wall = select_indices(
       HostExec{}, L.n_owned, [&](std::int64_t i) { return ix.wall_vertex[L.vertices[i]] != 0; });
   c.wall_vertices.assign(wall.begin(), wall.end());
-  out.ids.finish();
 }
 
 }  // namespace qdemsph

@@ -31,8 +31,11 @@ namespace qdemsph {
 
 // Lookups over the global model, built once per run on every rank.
 struct ModelIndex {
-  std::vector<std::int64_t> vt_off;  // vertex -> free tets containing it (CSR)
-  std::vector<std::int32_t> vt;
+  // Vertex -> free tets containing it, by corner: the tets whose corner k is vertex v at
+  // [corner_off[4 v + k], corner_off[4 v + k + 1]) of corner_tet, in increasing order (so the
+  // whole list of v, [corner_off[4 v], corner_off[4 v + 4]), holds each of its tets once).
+  std::vector<std::int64_t> corner_off;
+  std::vector<std::int32_t> corner_tet;
   std::vector<std::int32_t> tets_at;  // free tets whose smallest vertex id is this vertex
   std::vector<std::array<std::int32_t, 3>> tri_edges;  // surface triangle -> its edges
   std::vector<std::uint8_t> contact_vertex;            // a vertex of some contact primitive
@@ -59,7 +62,9 @@ struct LocalLayout {
 class FeatureIds {
  public:
   std::vector<std::int64_t> vertex, triangle, edge;  // local -> global
-  void finish();                                     // builds the inverse lookups
+  // Global -> local, one entry per global vertex, triangle, edge (-1: not held): lookups in
+  // O(1) for a rebuild's history and every step's force shares, written where the lists are.
+  std::vector<std::int32_t> vertex_local, triangle_local, edge_local;
   std::uint64_t k1_to_global(std::uint64_t k1) const;
   std::uint64_t k2_to_global(std::uint64_t k1, std::uint64_t k2) const;
   // kNone when the feature is not held locally.
@@ -71,14 +76,14 @@ class FeatureIds {
   // the share names a feature or vertex this model lacks).
   ContactShare to_global(ContactShare s) const;
   ContactShare to_local(ContactShare s) const;
-
- private:
-  std::vector<std::pair<std::uint64_t, std::int64_t>> vertex_inv_;  // (global, local) sorted
 };
 
 struct LocalModel {
   Model model;
   FeatureIds ids;
+  // Global -> local tet numbers of the last build (-1: not held), kept so that a rebuild
+  // writes them in place.
+  std::vector<std::int32_t> tet_local;
 };
 
 // The rank's Model. x and v are given for the listed vertices (ghost values may be stale:

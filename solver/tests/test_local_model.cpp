@@ -49,8 +49,8 @@ LocalLayout layout_of(const Model& g, const ModelIndex& ix, int side, double cut
   L.n_owned = static_cast<std::int64_t>(L.vertices.size());
   std::set<std::int64_t> held, ghosts;
   for (std::int64_t i = 0; i < L.n_owned; ++i)
-    for (auto q = ix.vt_off[L.vertices[i]]; q < ix.vt_off[L.vertices[i] + 1]; ++q)
-      held.insert(ix.vt[q]);
+    for (auto q = ix.corner_off[4 * L.vertices[i]]; q < ix.corner_off[4 * L.vertices[i] + 4]; ++q)
+      held.insert(ix.corner_tet[q]);
   std::vector<std::int64_t> interior, boundary, halo;
   for (std::int64_t t : held) {
     const auto& tv = g.tets[t];
@@ -223,7 +223,8 @@ TEST(LocalModel, BuildIntoAnEarlierPartsStorageEqualsAFreshBuild) {
                 same(a.relax_inv_mass, b.relax_inv_mass) && same(a.flags, b.flags) &&
                 same(a.gid, b.gid) && same(a.body, b.body));
     EXPECT_TRUE(same(a.tets, b.tets) && same(a.dX_inv, b.dX_inv) && same(a.vol0, b.vol0) &&
-                same(a.tet_material, b.tet_material) && same(a.tet_gid, b.tet_gid));
+                same(a.tet_material, b.tet_material) && same(a.tet_gid, b.tet_gid) &&
+                same(a.corner_off, b.corner_off) && same(a.corner_ent, b.corner_ent));
     EXPECT_EQ(a.n_free_vertices, b.n_free_vertices);
     EXPECT_EQ(a.n_free_tets, b.n_free_tets);
     EXPECT_EQ(a.n_counted_tets, b.n_counted_tets);
@@ -242,6 +243,38 @@ TEST(LocalModel, BuildIntoAnEarlierPartsStorageEqualsAFreshBuild) {
                 same(reused.ids.triangle, fresh.ids.triangle) &&
                 same(reused.ids.edge, fresh.ids.edge));
     if (contact) EXPECT_GT(cb.prim_v.size(), 0u);
+  }
+}
+
+// A part's corner lists (taken from the global index, not sorted) hold each owned vertex's
+// corners in the one-rank order: by corner, then tet global id.
+TEST(LocalModel, CornerListsAreInTheOneRankOrder) {
+  auto pb = make_problem(kScene);
+  const Model& g = pb.model;
+  const ModelIndex ix = index_model(g);
+  for (int side = 0; side < 2; ++side) {
+    const LocalLayout L = layout_of(g, ix, side, 0.3);
+    std::vector<Vec3> x;
+    for (auto gv : L.vertices) x.push_back(g.x[gv]);
+    const Model m = build_local_model(g, ix, L, x, x).model;
+    const std::int64_t nt = m.n_tets();
+    std::vector<std::vector<std::pair<int, std::uint64_t>>> want(L.n_owned);
+    for (std::int64_t t = 0; t < nt; ++t)
+      for (int k = 0; k < 4; ++k)
+        if (m.tets[t][k] < L.n_owned) want[m.tets[t][k]].push_back({k, m.tet_gid[t]});
+    ASSERT_EQ(static_cast<std::int64_t>(m.corner_off.size()), L.n_owned + 1);
+    std::int64_t bad = 0;
+    for (std::int64_t i = 0; i < L.n_owned; ++i) {
+      std::sort(want[i].begin(), want[i].end());
+      std::vector<std::pair<int, std::uint64_t>> got;
+      for (std::int64_t q = m.corner_off[i]; q < m.corner_off[i + 1]; ++q) {
+        const std::int64_t e = m.corner_ent[q], k = e / nt, t = e % nt;
+        bad += m.tets[t][k] != i;
+        got.push_back({static_cast<int>(k), m.tet_gid[t]});
+      }
+      bad += got != want[i];
+    }
+    EXPECT_EQ(bad, 0) << "side " << side;
   }
 }
 
