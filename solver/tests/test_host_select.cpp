@@ -1,10 +1,13 @@
 // Host orchestration primitives of a distributed rank's layout rebuild: stream compaction and
-// bucketing by key (core/select_host.hpp) and the sorting permutation (core/radix_sort.hpp)
-// give the serial answers, the same for any number of threads.
+// bucketing by key (core/select_host.hpp), the sorting permutation (core/radix_sort.hpp) and
+// the several maxima of one pass (core/exec_host.hpp) give the serial answers, the same for any
+// number of threads.
 #include <gtest/gtest.h>
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <numeric>
 #include <vector>
@@ -69,6 +72,24 @@ TEST(HostSelect, SortedOrderOfUniqueKeysForAnyThreadCount) {
   const std::vector<std::int64_t> g = gathered<std::int64_t>(keys, serial);
   EXPECT_TRUE(std::is_sorted(g.begin(), g.end()));
   EXPECT_EQ(g.front(), static_cast<std::int64_t>(keys[serial.front()]));
+}
+
+TEST(HostSelect, ReduceMaxEachForAnyThreadCount) {
+  const std::int64_t n = 3 * kMinParallel + 5;
+  auto f = [](std::int64_t i) {
+    const double v = static_cast<double>((i * 2654435761u) % 100003);
+    return std::array<double, 3>{v, -v, i == 17 ? std::nan("") : 0.5 * v};  // NaN skipped
+  };
+  for (int t : {1, 2, 3, 8}) {
+    const auto m = with_threads(t, [&] { return reduce_max_each<3>(HostExec{}, n, f, -1e300); });
+    double want[3] = {-1e300, -1e300, -1e300};
+    for (std::int64_t i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k)
+        if (f(i)[k] > want[k]) want[k] = f(i)[k];
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(m[k], want[k]) << t << " threads, value " << k;
+  }
+  const auto none = [](std::int64_t) { return std::array<double, 2>{1.0, 2.0}; };
+  EXPECT_EQ((reduce_max_each<2>(HostExec{}, 0, none, 3.0)), (std::array<double, 2>{3.0, 3.0}));
 }
 
 }  // namespace
