@@ -4,13 +4,13 @@
 #include <climits>
 #include <cstdlib>
 #include <cstring>
-#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
 
 #include "core/exec_host.hpp"
 #include "core/select_host.hpp"
+#include "neighbor/scan.hpp"
 
 namespace qdemsph {
 
@@ -547,17 +547,16 @@ std::span<const std::int64_t> HaloPlan::lists(std::int64_t n_owned,
     return static_cast<std::int64_t>(std::unique(r, r + n) - r);
   };
   off_.resize(n_owned + 1);
-  off_[0] = 0;
   for_each(HostExec{}, n_owned, [&](std::int64_t i) {
     const std::int64_t m = offsets[i + 1] - offsets[i];
     if (m == 0) {
-      off_[i + 1] = 0;
+      off_[i] = 0;
       return;
     }
     std::vector<int> r(m);  // allocates only for an item with copies
-    off_[i + 1] = list(i, r.data());
+    off_[i] = list(i, r.data());
   });
-  std::partial_sum(off_.begin(), off_.end(), off_.begin());
+  exclusive_scan(HostExec{}, View<std::int64_t>{off_.data(), n_owned + 1}, n_owned);
   dst_.resize(off_[n_owned]);
   for_each(HostExec{}, n_owned, [&](std::int64_t i) {
     const std::int64_t m = offsets[i + 1] - offsets[i];

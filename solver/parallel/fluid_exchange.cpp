@@ -3,12 +3,12 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <numeric>
 #include <optional>
 #include <utility>
 
 #include "core/exec_host.hpp"
 #include "core/select_host.hpp"
+#include "neighbor/scan.hpp"
 #include "parallel/balance.hpp"
 #include "parallel/band_cells.hpp"
 #include "parallel/collectives.hpp"
@@ -294,9 +294,8 @@ class MpiFluidExchange final : public FluidExchange {
         g.occupied_off.push_back(static_cast<std::int64_t>(k));
     g.occupied_off.push_back(static_cast<std::int64_t>(g.occupied.size()));
     // Per cell of each block, the other ranks within the band (sorted, once each); per
-    // particle, its cell's count.
+    // particle, its cell's count (then the offsets).
     resize_for_overwrite(g.off, nown + 1);
-    g.off[0] = 0;
 #pragma omp parallel for schedule(static) if (nb > 1)
     for (std::int64_t b = 0; b < nb; ++b) {
       GhostBlock& w = g.block[b];
@@ -318,9 +317,9 @@ class MpiFluidExchange final : public FluidExchange {
         w.cell_off.push_back(static_cast<std::int64_t>(w.cell_ranks.size()));
       }
       for (std::int64_t i = lo(b); i < lo(b + 1); ++i)
-        g.off[i + 1] = w.cell_off[g.cell_of[i] + 1] - w.cell_off[g.cell_of[i]];
+        g.off[i] = w.cell_off[g.cell_of[i] + 1] - w.cell_off[g.cell_of[i]];
     }
-    std::partial_sum(g.off.begin(), g.off.end(), g.off.begin());
+    exclusive_scan(HostExec{}, View<std::int64_t>{g.off.data(), nown + 1}, nown);
     // Per particle, its cell's ranks.
     resize_for_overwrite(g.ranks, g.off[nown]);
 #pragma omp parallel for schedule(static) if (nb > 1)

@@ -1,7 +1,7 @@
 // Host orchestration primitives of a distributed rank's layout rebuild: stream compaction and
-// bucketing by key (core/select_host.hpp), the sorting permutation (core/radix_sort.hpp) and
-// the several maxima of one pass (core/exec_host.hpp) give the serial answers, the same for any
-// number of threads.
+// bucketing by key (core/select_host.hpp), the sorting permutation (core/radix_sort.hpp), the
+// prefix sum of counts (neighbor/scan.hpp) and the several maxima of one pass
+// (core/exec_host.hpp) give the serial answers, the same for any number of threads.
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -14,6 +14,7 @@
 
 #include "core/radix_sort.hpp"
 #include "core/select_host.hpp"
+#include "neighbor/scan.hpp"
 
 namespace qdemsph {
 namespace {
@@ -72,6 +73,25 @@ TEST(HostSelect, SortedOrderOfUniqueKeysForAnyThreadCount) {
   const std::vector<std::int64_t> g = gathered<std::int64_t>(keys, serial);
   EXPECT_TRUE(std::is_sorted(g.begin(), g.end()));
   EXPECT_EQ(g.front(), static_cast<std::int64_t>(keys[serial.front()]));
+}
+
+TEST(HostSelect, ExclusiveScanForAnyThreadCount) {
+  const std::int64_t n = 3 * kMinParallel + 11;
+  std::vector<std::int64_t> counts(n + 1, -1), serial(n + 1);
+  for (std::int64_t i = 0; i < n; ++i) counts[i] = (i * 7919) % 5;
+  serial[0] = 0;
+  for (std::int64_t i = 0; i < n; ++i) serial[i + 1] = serial[i] + counts[i];
+  for (int t : {1, 2, 3, 8}) {
+    std::vector<std::int64_t> c = counts;
+    const std::int64_t total = with_threads(t, [&] {
+      return exclusive_scan(HostExec{}, View<std::int64_t>{c.data(), n + 1}, n);
+    });
+    EXPECT_EQ(total, serial[n]) << t << " threads";
+    EXPECT_EQ(c, serial) << t << " threads";
+  }
+  std::vector<std::int64_t> none{7};
+  EXPECT_EQ(exclusive_scan(HostExec{}, View<std::int64_t>{none.data(), 1}, 0), 0);
+  EXPECT_EQ(none[0], 0);
 }
 
 TEST(HostSelect, ReduceMaxEachForAnyThreadCount) {
