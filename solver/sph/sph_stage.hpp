@@ -564,7 +564,11 @@ class SphStage final : public FluidStage {
     take_owned(gid_.cview(), q.gid);
     take_owned(key_.cview(), q.key);
     q.cost.clear();
-    if (laid_out_) take_owned(cost_.cview(), q.cost);  // measured by the last compute()
+    q.slot.clear();
+    if (laid_out_) {
+      take_owned(cost_.cview(), q.cost);  // measured by the last compute()
+      take_owned(slot_.cview(), q.slot);
+    }
     part.reset();
     const std::int64_t nown = ex_->distribute(q, timers_);
     part.emplace(timers_, "sph.rebuild.in");
