@@ -669,12 +669,12 @@ class SphStage final : public FluidStage {
     const auto slot = slot_.cview();
     const std::int64_t nown = n_own_;
     const CellGrid g = grid_all_;
-    return reduce_max(
-        Exec{}, n_,  // fluid and markers (walls do not move)
+    return std::sqrt(reduce_max(
+        Exec{}, nf_ + nml_,  // fluid and markers, the groups first in order (walls do not move)
         QDEMSPH_LAMBDA(std::int64_t i) {
-          return slot[i] < nown ? norm(g.nearest(x[i] - x0[slot[i]])) : 0.0;
+          return slot[i] < nown ? norm2(g.nearest(x[i] - x0[slot[i]])) : 0.0;
         },
-        0.0);
+        0.0));
   }
 
   // Component arrays of this rank's particles whose ghost entries a refresh sets.
@@ -743,11 +743,12 @@ class SphStage final : public FluidStage {
     refresh_ghosts(f);
     const auto rho = rho_.cview(), p = p_.cview();
     const auto pr = pr_.view();
-    const auto sl = slot_.cview();
+    const auto at = inv_.cview();
     const std::int64_t nown = n_own_;
     for_each(
-        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) {
-          if (sl[i] >= nown) pr[i] = p[i] / (rho[i] * rho[i]);
+        Exec{}, n_ - nown, QDEMSPH_LAMBDA(std::int64_t k) {
+          const std::int64_t i = at[nown + k];  // ghost k's particle
+          pr[i] = p[i] / (rho[i] * rho[i]);
         });
   }
 
