@@ -2,6 +2,7 @@
 // The CUDA twin is exec_cuda.cuh; stage code is written once against either.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -41,6 +42,27 @@ double reduce_max(HostExec, std::int64_t n, F f, double init) {
   for (std::int64_t i = 0; i < n; ++i) {
     const double v = f(i);
     m = v > m ? v : m;
+  }
+  return m;
+}
+
+// The largest f(i)[k] over [0, n) for each of K values at once (init where n is 0): one pass
+// where K reduce_max calls would take K (host orchestration: a layout rebuild's extremes). The
+// maximum is exact, so the result does not depend on the thread count; NaNs are skipped.
+template <int K, class F>
+std::array<double, K> reduce_max_each(HostExec, std::int64_t n, F f, double init) {
+  std::array<double, K> m;
+  m.fill(init);
+#pragma omp parallel if (n >= kMinParallel)
+  {
+    std::array<double, K> t = m;
+#pragma omp for schedule(static) nowait
+    for (std::int64_t i = 0; i < n; ++i) {
+      const std::array<double, K> v = f(i);
+      for (int k = 0; k < K; ++k) t[k] = v[k] > t[k] ? v[k] : t[k];
+    }
+#pragma omp critical
+    for (int k = 0; k < K; ++k) m[k] = t[k] > m[k] ? t[k] : m[k];
   }
   return m;
 }

@@ -183,6 +183,7 @@ class Vec3Buffer {
   }
   void assign(const std::vector<Vec3>& h);
   std::vector<Vec3> to_host() const;
+  Buffer<double>& component(int a) { return a == 0 ? x_ : (a == 1 ? y_ : z_); }
   void zero() {
     x_.zero();
     y_.zero();
@@ -259,6 +260,12 @@ void write_on_host(Buffer<T>& b, std::int64_t n, StagingBytes& stage, Write writ
   T* out = reinterpret_cast<T*>(stage.data());
   write(out);
   b.assign(out, n);
+}
+// The same for 3-vectors, a component at a time: write(out, a) stores component a.
+template <class Write>
+void write_on_host(Vec3Buffer& b, std::int64_t n, StagingBytes& stage, Write write) {
+  for (int a = 0; a < 3; ++a)
+    write_on_host(b.component(a), n, stage, [&](double* out) { write(out, a); });
 }
 
 }  // namespace qdemsph

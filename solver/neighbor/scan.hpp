@@ -3,7 +3,10 @@
 // neighbor_cuda.cuh. Atomics are usable inside QDEMSPH_LAMBDA bodies on both.
 #pragma once
 
+#include <omp.h>
+
 #include <cstdint>
+#include <vector>
 
 #include "core/exec_host.hpp"
 #include "core/memory.hpp"
@@ -19,18 +22,41 @@ QDEMSPH_HD int atomic_inc(int* p) {
 #endif
 }
 
-// In place exclusive prefix sum (serial on the host: deterministic) of c[0..n); returns the total.
-// c must have n + 1 entries: c[n] receives the total too, so c is a CSR offset array afterwards.
+// In place exclusive prefix sum of the counts c[0..n); returns the total. c must have n + 1
+// entries: c[n] receives the total too, so c is a CSR offset array afterwards. On the host a
+// long array (a layout rebuild's per-particle counts) is summed on the threads, in as many
+// contiguous blocks as threads: each block's total, then each block from its offset. Integer
+// sums are exact, so the result does not depend on the thread count. Bytes: 8 read and 8
+// written per entry, and 8 more read on several threads.
 template <class T>
 std::int64_t exclusive_scan(HostExec, View<T> c, std::int64_t n) {
-  std::int64_t s = 0;
-  for (std::int64_t i = 0; i < n; ++i) {
-    const std::int64_t v = c[i];
-    c[i] = static_cast<T>(s);
-    s += v;
+  // The running sum from `first` over block b of nb (entries [n b / nb, n (b + 1) / nb)), each
+  // entry replaced by the sum before it when `write`; through a pointer of its own: read through
+  // the parallel region's captures, the loop ran 5 x slower on one thread.
+  const auto block = [p = c.p, n](std::int64_t b, std::int64_t nb, std::int64_t first, bool write) {
+    std::int64_t s = first;
+    const std::int64_t e = n * (b + 1) / nb;
+    for (std::int64_t i = n * b / nb; i < e; ++i) {
+      const std::int64_t v = p[i];
+      if (write) p[i] = static_cast<T>(s);
+      s += v;
+    }
+    return s;
+  };
+  const std::int64_t nb = n >= kMinParallel ? omp_get_max_threads() : 1;
+  if (nb == 1) {
+    const std::int64_t s = block(0, 1, 0, true);
+    c[n] = static_cast<T>(s);
+    return s;
   }
-  c[n] = static_cast<T>(s);
-  return s;
+  std::vector<std::int64_t> at(nb + 1, 0);  // each block's offset
+#pragma omp parallel for schedule(static)
+  for (std::int64_t b = 0; b < nb; ++b) at[b + 1] = block(b, nb, 0, false);
+  for (std::int64_t b = 0; b < nb; ++b) at[b + 1] += at[b];
+#pragma omp parallel for schedule(static)
+  for (std::int64_t b = 0; b < nb; ++b) block(b, nb, at[b], true);
+  c[n] = static_cast<T>(at[nb]);
+  return at[nb];
 }
 
 // Reads one element of a buffer back to the host (a size after a scan).

@@ -10,6 +10,16 @@
 #include "parallel/partition.hpp"
 
 namespace qdemsph {
+namespace {
+
+// keys[i] = grid.key(pos[i]) (OpenMP threads).
+void grid_keys(const SfcGrid& grid, std::span<const Vec3> pos, std::vector<std::uint64_t>& keys) {
+  resize_for_overwrite(keys, pos.size());
+  for_each(HostExec{}, static_cast<std::int64_t>(pos.size()),
+           [&](std::int64_t i) { keys[i] = grid.key(pos[i]); });
+}
+
+}  // namespace
 
 Curve parse_curve(const std::string& name) {
   if (name == "morton") return Curve::Morton;
@@ -29,12 +39,6 @@ void allreduce_sum_same(MPI_Comm comm, double* v, int n) {
   MPI_Comm_rank(comm, &me);
   if (me == 0) std::copy(out.begin(), out.end(), v);
   MPI_Bcast(v, n, MPI_DOUBLE, 0, comm);
-}
-
-void grid_keys(const SfcGrid& grid, std::span<const Vec3> pos, std::vector<std::uint64_t>& keys) {
-  resize_for_overwrite(keys, pos.size());
-  for_each(HostExec{}, static_cast<std::int64_t>(pos.size()),
-           [&](std::int64_t i) { keys[i] = grid.key(pos[i]); });
 }
 
 Decomposition balance(MPI_Comm comm, std::span<const Vec3> pos, std::span<const double> cost,

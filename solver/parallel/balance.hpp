@@ -44,9 +44,6 @@ Decomposition balance(MPI_Comm comm, std::span<const Vec3> pos, std::span<const 
                       Curve curve, double max_cell_fraction,
                       std::vector<std::uint64_t>* keys = nullptr);
 
-// keys[i] = grid.key(pos[i]) (OpenMP threads).
-void grid_keys(const SfcGrid& grid, std::span<const Vec3> pos, std::vector<std::uint64_t>& keys);
-
 // Sum over ranks with the same result on every rank (reduce to rank 0, then broadcast), so
 // that decisions taken from it agree everywhere.
 void allreduce_sum_same(MPI_Comm comm, double* v, int n);

@@ -4,13 +4,13 @@
 #include <climits>
 #include <cstdlib>
 #include <cstring>
-#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
 
 #include "core/exec_host.hpp"
 #include "core/select_host.hpp"
+#include "neighbor/scan.hpp"
 
 namespace qdemsph {
 
@@ -532,13 +532,20 @@ void HaloPlan::replan(std::int64_t n_owned, std::span<const std::int64_t> offset
   gather_ids(gid);
 }
 
-// Each item's list without this rank and repeats (counted, then written, on the threads).
+// Each item's list without this rank and repeats (counted, then written, on the threads). A
+// list that is already so (increasing, without this rank: the fluid's ghost lists) is copied
+// as it is; only the others are sorted, in a scratch array allocated for them alone.
 std::span<const std::int64_t> HaloPlan::lists(std::int64_t n_owned,
                                               std::span<const std::int64_t> offsets,
                                               std::span<const int> ranks) {
   if (static_cast<std::int64_t>(offsets.size()) != n_owned + 1)
     throw std::invalid_argument("HaloPlan: offsets need n_owned + 1 entries");
   n_owned_ = n_owned;
+  auto clean = [&](std::int64_t i) {
+    for (std::int64_t k = offsets[i]; k < offsets[i + 1]; ++k)
+      if (ranks[k] == me_ || (k > offsets[i] && ranks[k] <= ranks[k - 1])) return false;
+    return true;
+  };
   auto list = [&](std::int64_t i, int* r) {  // item i's ranks into r (at most its list's size)
     std::int64_t n = 0;
     for (std::int64_t k = offsets[i]; k < offsets[i + 1]; ++k)
@@ -546,22 +553,25 @@ std::span<const std::int64_t> HaloPlan::lists(std::int64_t n_owned,
     std::sort(r, r + n);
     return static_cast<std::int64_t>(std::unique(r, r + n) - r);
   };
-  off_.resize(n_owned + 1);
-  off_[0] = 0;
+  resize_for_overwrite(off_, static_cast<std::size_t>(n_owned + 1));
   for_each(HostExec{}, n_owned, [&](std::int64_t i) {
     const std::int64_t m = offsets[i + 1] - offsets[i];
-    if (m == 0) {
-      off_[i + 1] = 0;
+    if (m == 0 || clean(i)) {
+      off_[i] = m;
       return;
     }
-    std::vector<int> r(m);  // allocates only for an item with copies
-    off_[i + 1] = list(i, r.data());
+    std::vector<int> r(m);
+    off_[i] = list(i, r.data());
   });
-  std::partial_sum(off_.begin(), off_.end(), off_.begin());
-  dst_.resize(off_[n_owned]);
+  exclusive_scan(HostExec{}, View<std::int64_t>{off_.data(), n_owned + 1}, n_owned);
+  resize_for_overwrite(dst_, static_cast<std::size_t>(off_[n_owned]));
   for_each(HostExec{}, n_owned, [&](std::int64_t i) {
     const std::int64_t m = offsets[i + 1] - offsets[i];
     if (m == 0) return;
+    if (clean(i)) {
+      std::copy(ranks.begin() + offsets[i], ranks.begin() + offsets[i + 1], dst_.begin() + off_[i]);
+      return;
+    }
     std::vector<int> r(m);
     list(i, r.data());
     std::copy(r.begin(), r.begin() + (off_[i + 1] - off_[i]), dst_.begin() + off_[i]);

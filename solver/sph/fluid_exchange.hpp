@@ -32,14 +32,16 @@
 namespace qdemsph {
 
 // The per-particle fields that travel with a particle (x, v, rho, m carry state across
-// steps; type, gid, key name it), and what each cost in the last evaluation (does not travel;
-// empty: not measured yet).
+// steps; type, gid, key name it), and two that do not: what each cost in the last evaluation
+// (empty: not measured yet) and its owned slot in the layout the last distribute() returned
+// (empty: none, as at the first one).
 struct FluidParticles {
   std::vector<Vec3> x, v;
   std::vector<double> rho, m;
   std::vector<std::uint8_t> type;
   std::vector<std::uint64_t> gid, key;
   std::vector<double> cost;
+  std::vector<std::int64_t> slot;
   std::size_t size() const { return x.size(); }
 };
 
@@ -59,8 +61,10 @@ class FluidExchange {
  public:
   virtual ~FluidExchange() = default;
   // In: this rank's owned particles, with their costs when measured (a new partition weights
-  // them). Out: the particles it owns now (migrated to the owner of their position), then the
-  // ghosts it needs (cost empty); returns the owned count. Its parts are timed into `timers`
+  // them) and their slots in the last layout when it had one (a rebuild on the standing cut
+  // then skips the owner search for particles deep inside this rank's piece). Out: the
+  // particles it owns now (migrated to the owner of their position), then the ghosts it needs
+  // (cost and slot empty); returns the owned count. Its parts are timed into `timers`
   // (sph.rebuild.owners, .migrate, .ghosts, .halo). Collective.
   virtual std::int64_t distribute(FluidParticles& p, PhaseTimers& timers) = 0;
   // At each step after the first distribute(): true when the layout still holds, given this

@@ -1,16 +1,20 @@
 // Host orchestration primitives of a distributed rank's layout rebuild: stream compaction and
-// bucketing by key (core/select_host.hpp) and the sorting permutation (core/radix_sort.hpp)
-// give the serial answers, the same for any number of threads.
+// bucketing by key (core/select_host.hpp), the sorting permutation (core/radix_sort.hpp), the
+// prefix sum of counts (neighbor/scan.hpp) and the several maxima of one pass
+// (core/exec_host.hpp) give the serial answers, the same for any number of threads.
 #include <gtest/gtest.h>
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <numeric>
 #include <vector>
 
 #include "core/radix_sort.hpp"
 #include "core/select_host.hpp"
+#include "neighbor/scan.hpp"
 
 namespace qdemsph {
 namespace {
@@ -69,6 +73,43 @@ TEST(HostSelect, SortedOrderOfUniqueKeysForAnyThreadCount) {
   const std::vector<std::int64_t> g = gathered<std::int64_t>(keys, serial);
   EXPECT_TRUE(std::is_sorted(g.begin(), g.end()));
   EXPECT_EQ(g.front(), static_cast<std::int64_t>(keys[serial.front()]));
+}
+
+TEST(HostSelect, ExclusiveScanForAnyThreadCount) {
+  const std::int64_t n = 3 * kMinParallel + 11;
+  std::vector<std::int64_t> counts(n + 1, -1), serial(n + 1);
+  for (std::int64_t i = 0; i < n; ++i) counts[i] = (i * 7919) % 5;
+  serial[0] = 0;
+  for (std::int64_t i = 0; i < n; ++i) serial[i + 1] = serial[i] + counts[i];
+  for (int t : {1, 2, 3, 8}) {
+    std::vector<std::int64_t> c = counts;
+    const std::int64_t total = with_threads(t, [&] {
+      return exclusive_scan(HostExec{}, View<std::int64_t>{c.data(), n + 1}, n);
+    });
+    EXPECT_EQ(total, serial[n]) << t << " threads";
+    EXPECT_EQ(c, serial) << t << " threads";
+  }
+  std::vector<std::int64_t> none{7};
+  EXPECT_EQ(exclusive_scan(HostExec{}, View<std::int64_t>{none.data(), 1}, 0), 0);
+  EXPECT_EQ(none[0], 0);
+}
+
+TEST(HostSelect, ReduceMaxEachForAnyThreadCount) {
+  const std::int64_t n = 3 * kMinParallel + 5;
+  auto f = [](std::int64_t i) {
+    const double v = static_cast<double>((i * 2654435761u) % 100003);
+    return std::array<double, 3>{v, -v, i == 17 ? std::nan("") : 0.5 * v};  // NaN skipped
+  };
+  for (int t : {1, 2, 3, 8}) {
+    const auto m = with_threads(t, [&] { return reduce_max_each<3>(HostExec{}, n, f, -1e300); });
+    double want[3] = {-1e300, -1e300, -1e300};
+    for (std::int64_t i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k)
+        if (f(i)[k] > want[k]) want[k] = f(i)[k];
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(m[k], want[k]) << t << " threads, value " << k;
+  }
+  const auto none = [](std::int64_t) { return std::array<double, 2>{1.0, 2.0}; };
+  EXPECT_EQ((reduce_max_each<2>(HostExec{}, 0, none, 3.0)), (std::array<double, 2>{3.0, 3.0}));
 }
 
 }  // namespace

@@ -390,6 +390,46 @@ TEST(DistributedFluid, LayoutDoesNotDependOnTheThreadCount) {
   if (size_of() > 1) EXPECT_GT(one.second.size(), static_cast<std::size_t>(one.first));
 }
 
+// A rebuild on the standing cut (the skin rule's) given the particles' slots of the last
+// layout skips the owner search for those whose band cell was interior then: the particles it
+// owns afterwards are those of the full search. Every particle moved 0.6 skin (past the rule's
+// half skin, less than a band cell), in one of six directions, so some cross the cut.
+TEST(DistributedFluid, StandingCutRebuildOwnsWhatTheFullSearchOwns) {
+  const FluidSetup f = dam_setup();
+  auto known = make_fluid_exchange(options(50, 0.0), f),
+       full = make_fluid_exchange(options(50, 0.0), f);
+  FluidParticles p = share_of(f), q = share_of(f);
+  PhaseTimers parts;
+  const std::int64_t n0 = known->distribute(p, parts);
+  ASSERT_EQ(full->distribute(q, parts), n0);
+  ASSERT_EQ(p.gid, q.gid);
+  for (auto* v : {&p.x, &p.v}) v->resize(n0);  // the owned particles, as a stage hands them
+  for (auto* v : {&p.rho, &p.m}) v->resize(n0);
+  for (auto* v : {&p.gid, &p.key}) v->resize(n0);
+  p.type.resize(n0);
+  const double d = 0.6 * known->skin();
+  for (std::int64_t i = 0; i < n0; ++i) {
+    Vec3 step{};
+    step[static_cast<int>(p.gid[i] % 3)] = p.gid[i] % 2 ? d : -d;
+    p.x[i] += step;
+  }
+  FluidParticles moved = p;
+  p.slot.resize(n0);
+  std::iota(p.slot.begin(), p.slot.end(), std::int64_t{0});
+  ASSERT_FALSE(known->keep(d, 0.0));
+  ASSERT_FALSE(full->keep(d, 0.0));
+  const std::int64_t n1 = known->distribute(p, parts);
+  EXPECT_EQ(full->distribute(moved, parts), n1);
+  EXPECT_EQ(std::vector<std::uint64_t>(p.gid.begin(), p.gid.begin() + n1),
+            std::vector<std::uint64_t>(moved.gid.begin(), moved.gid.begin() + n1));
+  EXPECT_TRUE(p.slot.empty());  // slots do not travel
+  std::int64_t changed = 0;     // particles that changed owner, over the ranks
+  for (std::int64_t i = 0; i < n1; ++i)
+    changed += std::find(q.gid.begin(), q.gid.begin() + n0, p.gid[i]) == q.gid.begin() + n0;
+  MPI_Allreduce(MPI_IN_PLACE, &changed, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+  if (size_of() > 1) EXPECT_GT(changed, 0);
+}
+
 // The stage's traffic over a run: one evaluation per compute() (the constructor's and one
 // per step), rebuilds by the skin rule and the cuts, and on one rank nothing sent.
 TEST(DistributedFluid, StageTrafficPerEvaluation) {
