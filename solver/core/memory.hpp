@@ -83,7 +83,9 @@ struct View {
 // one too: for the arrays of a model uploaded again and again at a few per cent other sizes
 // (a distributed rank's part, rebuilt at every layout, whose band widens as rebuilds get
 // dear), so that the first layout larger than the set-up's reuses them as well (on the host no
-// fresh pages to fault in, on a GPU no cudaFree and cudaMalloc). Other buffers stay exact.
+// fresh pages to fault in, on a GPU no cudaFree and cudaMalloc; GPU-size dominoes on the CPU
+// backend, one thread: that layout's upload 56-72 ms against 23-29 ms for the next, before).
+// Other buffers stay exact.
 class BufferRoom {
  public:
   BufferRoom() : was_(on_) { on_ = true; }
