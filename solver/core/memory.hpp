@@ -79,11 +79,32 @@ struct View {
   QDEMSPH_HD std::int64_t size() const { return n; }
 };
 
+// While one lives on a thread, a Buffer's first allocation there takes the 1/8 room of a later
+// one too: for the arrays of a model uploaded again and again at a few per cent other sizes
+// (a distributed rank's part, rebuilt at every layout, whose band widens as rebuilds get
+// dear), so that the first layout larger than the set-up's reuses them as well (on the host no
+// fresh pages to fault in, on a GPU no cudaFree and cudaMalloc; GPU-size dominoes on the CPU
+// backend, one thread: that layout's upload 56-72 ms against 23-29 ms for the next, before).
+// Other buffers stay exact.
+class BufferRoom {
+ public:
+  BufferRoom() : was_(on_) { on_ = true; }
+  ~BufferRoom() { on_ = was_; }
+  BufferRoom(const BufferRoom&) = delete;
+  BufferRoom& operator=(const BufferRoom&) = delete;
+  static bool on() { return on_; }
+
+ private:
+  bool was_;
+  static inline thread_local bool on_ = false;
+};
+
 // The allocation grows only: a resize or assign to a size within the capacity keeps it (no
 // free and allocate; on CUDA no cudaFree, which would wait for the device), so rebuilding a
 // model of about the same size reuses its memory, and view() keeps its pointer until a size
 // beyond the capacity. A buffer outgrowing an earlier allocation takes 1/8 more room, so a size
-// creeping up reallocates rarely. Only the destructor (or moving another buffer in) frees.
+// creeping up reallocates rarely (its first allocation too under a BufferRoom). Only the
+// destructor (or moving another buffer in) frees.
 template <class T>
 class Buffer {
   static_assert(std::is_trivially_copyable_v<T>);
@@ -115,7 +136,7 @@ class Buffer {
   // every element next.
   void resize_for_overwrite(std::int64_t n) {
     if (n > cap_) {
-      const std::int64_t want = cap_ > 0 ? n + n / 8 : n;
+      const std::int64_t want = cap_ > 0 || BufferRoom::on() ? n + n / 8 : n;
       space_free(space_, p_);
       p_ = nullptr, n_ = 0, cap_ = 0;  // consistent should the allocation throw
       p_ = static_cast<T*>(space_alloc(space_, sizeof(T) * want));

@@ -1158,8 +1158,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   }
 
   // Builds the rank's part from its owned state (vertices in gid order, the state of every
-  // tet it will hold in any order, its contact history) and uploads it.
+  // tet it will hold in any order, its contact history) and uploads it; the backend's and the
+  // halo plan's arrays take room from their first allocation (BufferRoom).
   void install(const StateSlice& s) {
+    const BufferRoom room;
     std::optional<PhaseTimers::Scope> part;
     part.emplace(timers_, "migration.layout");
     const Model& g = *g_;
