@@ -101,7 +101,6 @@ class MpiFluidExchange final : public FluidExchange {
         cost = cost_;
       }
       dec_ = balance(comm_, p.x, cost, curve_, max_cell_, &curve_key_);
-      same_cut_ = false;
       for_each(HostExec{}, n,
                [&](std::int64_t i) { dest_[i] = owner_of_key(dec_.splitters, curve_key_[i]); });
     } else {
@@ -230,9 +229,7 @@ class MpiFluidExchange final : public FluidExchange {
     KeyIndex cells;                       // distinct band cells
     std::vector<std::uint64_t> cell_key;  // per cell: its key
     std::vector<std::uint8_t> border;     // per cell: not interior
-    KeyIndex last_cells;                  // the last search's cells and their border flags
-    std::vector<std::uint8_t> last_border;
-    KeyIndex in_piece;  // interior(): tree cells tested, and the answers
+    KeyIndex in_piece;                    // interior(): tree cells tested, and the answers
     std::vector<std::uint8_t> in_piece_value;
     std::vector<std::int64_t> cell_off;  // per cell: a range of cell_ranks
     std::vector<int> cell_ranks;
@@ -267,25 +264,15 @@ class MpiFluidExchange final : public FluidExchange {
     if (static_cast<std::int64_t>(g.block.size()) < nb) g.block.resize(nb);
     resize_for_overwrite(g.cell_of, nown);
     // Each block's distinct cells, in the order of their first particle (one lookup for a run
-    // of particles in the same cell), and whether each is on the piece's border: on the cut and
-    // band of the last search (a rebuild the skin rule asked for) mostly the last search's
-    // answer, found in the block's table of then (particles moved less than a band cell, and a
-    // block holds about the same ones), else interior()'s (six divisions, up to eight tree
-    // cells' memo lookups): rank 0's cells of the 359 k-particle dam break on 2 ranks of one
-    // thread 21.8 -> 14.2 ms a rebuild (every cell found).
+    // of particles in the same cell), and whether each is on the piece's border.
 #pragma omp parallel for schedule(static) if (nb > 1)
     for (std::int64_t b = 0; b < nb; ++b) {
       GhostBlock& w = g.block[b];
-      std::swap(w.cells, w.last_cells);
-      std::swap(w.border, w.last_border);
-      if (!same_cut_) {  // the last search's answers, and interior()'s, were for another cut
-        w.last_cells.clear();
-        w.in_piece.clear();
-        w.in_piece_value.clear();
-      }
       w.cells.clear();
       w.cell_key.clear();
       w.border.clear();
+      w.in_piece.clear();  // the decomposition may be new
+      w.in_piece_value.clear();
       std::uint64_t last = 0;
       for (std::int64_t i = lo(b); i < lo(b + 1); ++i) {
         const std::uint64_t k = cell_key(x[i]);
@@ -297,8 +284,7 @@ class MpiFluidExchange final : public FluidExchange {
         g.cell_of[i] = w.cells.insert(k);
         if (g.cell_of[i] == static_cast<std::int64_t>(w.cell_key.size())) {
           w.cell_key.push_back(k);
-          const std::int64_t j = w.last_cells.find(k);
-          w.border.push_back(j >= 0 ? w.last_border[j] : !interior(k, w));
+          w.border.push_back(!interior(k, w));
         }
       }
     }
@@ -352,7 +338,6 @@ class MpiFluidExchange final : public FluidExchange {
     }
     deep_n_ = nown;
     deep_band_ = std::min(band_.band, band_.band_z);
-    same_cut_ = true;
     exclusive_scan(HostExec{}, View<std::int64_t>{g.off.data(), nown + 1}, nown);
     // Per particle, its cell's ranks.
     resize_for_overwrite(g.ranks, g.off[nown]);
@@ -462,7 +447,6 @@ class MpiFluidExchange final : public FluidExchange {
     if (skin != skin_) {
       skin_ = skin;
       band_ = BandGrid((support_ + skin_) / 2, z0_, period_);
-      same_cut_ = false;
     }
   }
 
@@ -506,7 +490,6 @@ class MpiFluidExchange final : public FluidExchange {
   std::vector<std::uint8_t> deep_;
   std::int64_t deep_n_ = -1;
   double deep_band_ = 0, moved_ = kUnknown;
-  bool same_cut_ = false;  // dec_ and band_ are those of the last find_ghost_ranks()
 };
 
 }  // namespace
