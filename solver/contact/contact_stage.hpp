@@ -898,14 +898,9 @@ class ContactStage {
           law.kt = ktr * law.kn;
           // Tangential history of this feature pair from the previous step (sorted keys).
           Vec3 xi{}, h_old{};
-          std::int64_t lo = 0, hi = nprev;
-          while (lo < hi) {
-            const std::int64_t mid = (lo + hi) / 2;
-            if (pk1[mid] < r.k1 || (pk1[mid] == r.k1 && pk2[mid] < r.k2))
-              lo = mid + 1;
-            else
-              hi = mid;
-          }
+          const std::int64_t lo = lower_bound_index(nprev, [&](std::int64_t m) {
+            return pk1[m] < r.k1 || (pk1[m] == r.k1 && pk2[m] < r.k2);
+          });
           const bool known = lo < nprev && pk1[lo] == r.k1 && pk2[lo] == r.k2 && pact[lo];
           if (known) {
             xi = pxi[lo];
@@ -945,14 +940,9 @@ class ContactStage {
           Exec{}, nc > nprev ? nc : nprev, QDEMSPH_LAMBDA(std::int64_t i) {
             double s = i < ncur ? ed[i] : 0.0;
             if (i < nprev && pact[i]) {
-              std::int64_t lo = 0, hi = ncur;
-              while (lo < hi) {
-                const std::int64_t mid = (lo + hi) / 2;
-                if (nk1c[mid] < pk1[i] || (nk1c[mid] == pk1[i] && nk2c[mid] < pk2[i]))
-                  lo = mid + 1;
-                else
-                  hi = mid;
-              }
+              const std::int64_t lo = lower_bound_index(ncur, [&](std::int64_t m) {
+                return nk1c[m] < pk1[i] || (nk1c[m] == pk1[i] && nk2c[m] < pk2[i]);
+              });
               const bool kept = lo < ncur && nk1c[lo] == pk1[i] && nk2c[lo] == pk2[i] && nactc[lo];
               if (!kept) {
                 const ContactRecord& r = prec[i];
@@ -1076,14 +1066,9 @@ class ContactStage {
     const auto sh = in_.cview();
     for_each(
         Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
-          std::int64_t lo = 0, hi = nin;  // this vertex's shares: [lo, end) of the sorted ones
-          while (lo < hi) {
-            const std::int64_t mid = (lo + hi) / 2;
-            if (sh[mid].vertex < i)
-              lo = mid + 1;
-            else
-              hi = mid;
-          }
+          // This vertex's shares: [lo, end) of the sorted ones.
+          const std::int64_t lo =
+              lower_bound_index(nin, [&](std::int64_t m) { return sh[m].vertex < i; });
           std::int64_t end = lo;
           while (end < nin && sh[end].vertex == i) ++end;
           const int b = vcnt[i], e = vcnt[i + 1];

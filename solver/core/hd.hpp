@@ -1,5 +1,6 @@
 // Portability macros: physics is written once as host+device inline functions.
 #pragma once
+#include <cstdint>
 
 #if defined(__CUDACC__)
 #define QDEMSPH_HD __host__ __device__ __forceinline__
@@ -15,4 +16,19 @@ namespace qdemsph {
 // loops whose occupancy, not their arithmetic, limits them (sph/sph_stage.hpp).
 template <int N>
 struct MinBlocks {};
+
+// The first index in [0, n) at which before(index) is false, for a predicate true on a prefix
+// (n when it holds everywhere): std::lower_bound over indices, in a kernel too.
+template <class Before>
+QDEMSPH_HD std::int64_t lower_bound_index(std::int64_t n, const Before& before) {
+  std::int64_t lo = 0, hi = n;
+  while (lo < hi) {
+    const std::int64_t mid = (lo + hi) / 2;
+    if (before(mid))
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return lo;
+}
 }  // namespace qdemsph

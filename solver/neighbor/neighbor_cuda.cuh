@@ -55,15 +55,7 @@ inline void sort_by_key(CudaExec, View<const std::int64_t> keys, std::int64_t nk
   }
   const std::int64_t* sorted = s.p + n;
   for_each(CudaExec{}, nkeys + 1, [=] __device__(std::int64_t k) {
-    std::int64_t lo = 0, hi = n;
-    while (lo < hi) {
-      const std::int64_t mid = (lo + hi) / 2;
-      if (sorted[mid] < k)
-        lo = mid + 1;
-      else
-        hi = mid;
-    }
-    start[k] = lo;
+    start[k] = lower_bound_index(n, [&](std::int64_t m) { return sorted[m] < k; });
   });
 }
 
