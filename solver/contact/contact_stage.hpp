@@ -111,6 +111,19 @@ struct ContactTopology {
   double d_dem = 0;
   bool self_contact = false;
   Evaluator eval;  // feature pairs another rank evaluates are skipped
+  // On an MPI rank, per edge: 2 gid + 1 of its free end with the smallest global id when this
+  // rank owns that end, 2 gid when another rank does, kNoFreeEnd when neither end is free (one
+  // process: empty). The smaller key of two edges is their record's anchor (anchor_slot).
+  View<const std::uint64_t> edge_anchor;
+  static constexpr std::uint64_t kNoFreeEnd = ~std::uint64_t{1};
+
+  // Whether this rank evaluates the edge pair (ea, eb): eval.owns for its record, read from two
+  // keys before the pair's vertices are loaded (the pairs across a rank's border are found on
+  // both ranks: each skips the other's half).
+  QDEMSPH_HD bool evaluates_edges(int ea, int eb) const {
+    const std::uint64_t ka = edge_anchor[ea], kb = edge_anchor[eb];
+    return ((ka < kb ? ka : kb) & 1) != 0;
+  }
 
   QDEMSPH_HD int tri_vertex(std::int64_t s, int k) const { return tri_v[k * ntri + s]; }
   QDEMSPH_HD Vec3 edge_normal(int e) const {
@@ -137,10 +150,14 @@ struct ContactTopology {
     const double ha = body_h[ba], hb = body_h[bb];
     const double pen = d_dem + 0.5 * (ha < hb ? ha : hb);  // deepest gap still a contact
     Vec3 pa[3], pb[3];
+    bool all_owned = true;  // then so is every edge pair's anchor
     for (int k = 0; k < 3; ++k) {
-      pa[k] = x[tri_vertex(a, k)];
-      pb[k] = x[tri_vertex(b, k)];
+      const int ia = tri_vertex(a, k), ib = tri_vertex(b, k);
+      all_owned = all_owned && ia < eval.nfv && ib < eval.nfv;
+      pa[k] = x[ia];
+      pb[k] = x[ib];
     }
+    const bool test_anchor = !eval.all && !all_owned;
     const double tol = 1e-9 * pen;  // >> the round-off of a plane distance, << any gap
     // Point-face both ways.
     for (int side = 0; side < 2; ++side) {
@@ -178,6 +195,7 @@ struct ContactTopology {
     for (std::int64_t qa = own_e_off[a]; qa < own_e_off[a + 1]; ++qa)
       for (std::int64_t qb = own_e_off[b]; qb < own_e_off[b + 1]; ++qb) {
         const int ea = own_e[qa], eb = own_e[qb];
+        if (test_anchor && !evaluates_edges(ea, eb)) continue;
         const bool swap = eb < ea;
         const int e1 = swap ? eb : ea, e2 = swap ? ea : eb;
         const int a0 = edge_v[e1], a1 = edge_v[ne + e1], b0 = edge_v[e2], b1 = edge_v[ne + e2];
@@ -185,10 +203,6 @@ struct ContactTopology {
         const Vec3 xa0 = x[a0], xa1 = x[a1], xb0 = x[b0], xb1 = x[b1];
         const double reach = 0.5 * (norm(xa1 - xa0) + norm(xb1 - xb0)) + d_dem + tol;
         if (norm2(0.5 * ((xa0 + xa1) - (xb0 + xb1))) > reach * reach) continue;
-        // After the distance test: the anchor's owner lookup reads four vertices' body, flag
-        // and global id, which most far-apart edge pairs need not (the same records either way).
-        const std::int32_t ends[4] = {a0, a1, b0, b1};
-        if (!eval.owns(kEdgeEdge, ends)) continue;
         const EdgeEdge ee = edge_edge(xa0, xa1, xb0, xb1, edge_normal(e1), edge_normal(e2));
         // Edges have no face region to confirm a penetration: two skew edges merely passing
         // behind each other would read as a deep overlap. Accept |d| < D_DEM only.
@@ -269,6 +283,24 @@ class ContactStage {
     });
   }
 
+  // ContactTopology::edge_anchor for a model with ghosts (else empty).
+  void upload_edge_anchors(const Model& m) {
+    const std::int64_t ne = ghosts_ ? ne_ : 0, nfv = nfv_, nfree = nfree_, nv = nv_;
+    const bool ids = static_cast<std::int64_t>(m.gid.size()) == nv;
+    const auto& edges = m.contact.edges;
+    write_on_host(edge_anchor_, ne, stage_, [&](std::uint64_t* key) {
+      for_each(HostExec{}, ne, [&](std::int64_t e) {
+        std::uint64_t k = ContactTopology::kNoFreeEnd;
+        for (const std::int32_t i : edges[e]) {
+          if (i >= nfree) continue;
+          const std::uint64_t g = ids ? m.gid[i] : static_cast<std::uint64_t>(i);
+          k = std::min(k, 2 * g + (i < nfv ? 1 : 0));
+        }
+        key[e] = k;
+      });
+    });
+  }
+
   // The model's contact topology, and a fresh start (no history, pair list or counters); a
   // stage uploaded again keeps its storage (a distributed rank's rebuilt model).
   void upload(const Model& m) {
@@ -341,6 +373,7 @@ class ContactStage {
                                " after a fixed body's vertex");
     ghosts_ = nfree_ > nfv_;     // free vertices other ranks own (a distributed run's rank)
     fixed_held_ = nfree_ < nv_;  // fixed bodies' vertices (their point-face hits: keep_evaluated)
+    upload_edge_anchors(m);
     pc_.resize(np_);
     pr_.resize(np_);
     pc_ref_.resize(np_);
@@ -562,8 +595,8 @@ class ContactStage {
            pk1_.bytes() + pk2_.bytes() + pxi_.bytes() + nk1_.bytes() + nk2_.bytes() + nxi_.bytes() +
            pen_.bytes() + pet_.bytes() + nen_.bytes() + net_.bytes() + ediss_.bytes() +
            ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() + pr_ref_.bytes() +
-           cells_.bytes() + pairs_.bytes() + vgid_.bytes() + rec_tmp_.bytes() + in_.bytes() +
-           sl_.bytes() + out_.bytes() + keep_.bytes();
+           cells_.bytes() + pairs_.bytes() + vgid_.bytes() + edge_anchor_.bytes() +
+           rec_tmp_.bytes() + in_.bytes() + sl_.bytes() + out_.bytes() + keep_.bytes();
   }
 
   ContactTopology topology() const {
@@ -586,6 +619,7 @@ class ContactStage {
     t.d_dem = d_dem_;
     t.self_contact = self_;
     t.eval = evaluator();
+    t.edge_anchor = edge_anchor_.cview();
     return t;
   }
 
@@ -1139,7 +1173,7 @@ class ContactStage {
   Buffer<std::int32_t> edge_tri_{S};
   Buffer<std::int32_t> tri_v_{S}, edge_v_{S}, prim_v_{S}, tri_body_{S}, prim_body_{S}, own_v_{S},
       own_e_{S}, prim_tri_{S}, wall_v_{S}, body_fixed_{S}, body_mat_{S}, vertex_body_{S};
-  Buffer<std::uint64_t> vgid_{S};
+  Buffer<std::uint64_t> vgid_{S}, edge_anchor_{S};
   Buffer<std::int64_t> own_v_off_{S}, own_e_off_{S}, prim_tri_off_{S};
   Buffer<double> body_h_{S}, pair_mu_{S}, pair_zeta_{S}, pair_kn_{S}, pair_E_{S}, wall_{S},
       wall_kn_{S}, inv_mass_{S}, pr_{S};

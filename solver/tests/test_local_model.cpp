@@ -16,6 +16,8 @@
 #include <vector>
 
 #include "contact/contact_record.hpp"
+#include "contact/contact_stage.hpp"
+#include "core/exec_host.hpp"
 #include "core/memory.hpp"
 #include "integrate/backend.hpp"
 #include "parallel/local_model.hpp"
@@ -299,6 +301,44 @@ TEST(LocalModel, AnchorSlotKnownAnswers) {
   EXPECT_EQ(anchor_slot(kEdgeEdge, fixed_edge, ids), 3);
   const std::int64_t none[4] = {1000001, 1000002, -1, -1};
   EXPECT_EQ(anchor_slot(kEdgeEdge, none, ids), -1);
+}
+
+// The narrow phase skips an edge pair another rank evaluates before loading its vertices, from
+// one key per edge (ContactTopology::evaluates_edges): the same answer as the record's anchor
+// (Evaluator::owns) for every pair of edges in each part, across the cut too.
+TEST(LocalModel, EdgeKeysTellTheEdgePairsAnchorOwner) {
+  auto pb = make_problem(kScene, "test.yaml", "cpu");
+  const Model& g = pb.model;
+  const ModelIndex ix = index_model(g);
+  for (int side = 0; side < 2; ++side) {
+    const LocalLayout L = layout_of(g, ix, side, 0.3);
+    std::vector<Vec3> x, v;
+    for (auto gv : L.vertices) {
+      x.push_back(g.x[gv]);
+      v.push_back(g.v[gv]);
+    }
+    const LocalModel lm = build_local_model(g, ix, L, x, v);
+    ContactStage<HostExec> stage;
+    stage.upload(lm.model);
+    const ContactTopology t = stage.topology();
+    ASSERT_FALSE(t.eval.all);
+    const auto& edges = lm.model.contact.edges;
+    const auto ne = static_cast<int>(edges.size());
+    std::int64_t mismatched = 0, here = 0, crossing = 0;
+    for (int a = 0; a < ne; ++a)
+      for (int b = a + 1; b < ne; ++b) {
+        const std::int32_t ends[4] = {edges[a][0], edges[a][1], edges[b][0], edges[b][1]};
+        const bool owns = t.eval.owns(kEdgeEdge, ends);
+        mismatched += t.evaluates_edges(a, b) != owns || t.evaluates_edges(b, a) != owns;
+        here += owns;
+        int owned = 0;
+        for (const std::int32_t i : ends) owned += i < lm.model.n_free_vertices;
+        crossing += owned > 0 && owned < 4;
+      }
+    EXPECT_EQ(mismatched, 0) << "side " << side;
+    EXPECT_GT(here, 0) << "side " << side;
+    EXPECT_GT(crossing, 0) << "side " << side;
+  }
 }
 
 TEST(LocalModel, UndoableElementForcesRestoreTheDissipatedEnergy) {
