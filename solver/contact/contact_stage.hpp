@@ -1052,7 +1052,7 @@ class ContactStage {
           const int i = ev[e];
           if (i >= 0) atomic_inc(&vcnt[i]);
         });
-    exclusive_scan(Exec{}, vcnt, nv_);
+    queue_exclusive_scan(Exec{}, vcnt, nv_);  // no total needed: on a GPU nothing waits here
     for_each(
         Exec{}, ne, QDEMSPH_LAMBDA(std::int64_t e) {
           const int i = ev[e];

@@ -1,6 +1,7 @@
 // CUDA twins of the neighbour layer's orchestration (nvcc only; include after
 // core/exec_cuda.cuh): exclusive_scan (scan.hpp) and sort_by_key (cell_grid.hpp). Data stays on
-// the device; only a scan's total comes back to the host (one synchronising 8-byte copy).
+// the device; only a scan's total comes back to the host (one synchronising 8-byte copy), and
+// not even that from queue_exclusive_scan.
 //
 //  - exclusive_scan: cub::DeviceScan::ExclusiveSum in place over n + 1 entries, so c[n] gets
 //    the total as on the host. Integer sums: the same result as the serial host scan.
@@ -19,13 +20,18 @@
 namespace qdemsph {
 
 template <class T>
-std::int64_t exclusive_scan(CudaExec, View<T> c, std::int64_t n) {
+void queue_exclusive_scan(CudaExec, View<T> c, std::int64_t n) {
   std::size_t bytes = 0;
   QDEMSPH_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, bytes, c.p, c.p, n + 1),
                      "cub::DeviceScan::ExclusiveSum (size)");
   QDEMSPH_CUDA_CHECK(
       cub::DeviceScan::ExclusiveSum(cuda_temp_storage(bytes), bytes, c.p, c.p, n + 1),
       "cub::DeviceScan::ExclusiveSum");
+}
+
+template <class T>
+std::int64_t exclusive_scan(CudaExec, View<T> c, std::int64_t n) {
+  queue_exclusive_scan(CudaExec{}, c, n);
   T total{};
   QDEMSPH_CUDA_CHECK(cudaMemcpy(&total, c.p + n, sizeof(T), cudaMemcpyDeviceToHost),
                      "scan total copy (an earlier kernel may have faulted)");

@@ -59,6 +59,13 @@ std::int64_t exclusive_scan(HostExec, View<T> c, std::int64_t n) {
   return at[nb];
 }
 
+// exclusive_scan for a caller that needs no total on the host: on a GPU the scan is queued and
+// nothing waits (c[n] holds the total on the device; neighbor_cuda.cuh).
+template <class T>
+void queue_exclusive_scan(HostExec, View<T> c, std::int64_t n) {
+  exclusive_scan(HostExec{}, c, n);
+}
+
 // Reads one element of a buffer back to the host (a size after a scan).
 template <class T>
 T read_back(const Buffer<T>& b, std::int64_t i) {
