@@ -14,7 +14,8 @@ Writes OUT/report.md (tables), OUT/report.html (tables + figures) and OUT/*.png:
   prediction_<sweep>.png       the model alone to 512 ranks (a PREDICTION, not a measurement)
 
 Efficiency: weak E(N) = t(N_ref) / t(N); strong E(N) = N_ref t(N_ref) / (N t(N)); t = step_s
-(run.py: stepping loop per step, output excluded). The model line of a measured series uses
+(run.py: stepping loop per step, output excluded) of the median run of the newest revision at
+each rank count (series()). The model line of a measured series uses
 per-item costs calibrated from that series' own 1-rank record and the partition geometry of
 its scenes (geometry.py); where it differs from the points, the points are right.
 
@@ -67,17 +68,26 @@ def machine_label(r) -> str:
 
 def series(recs):
     """{(sweep, backend, variant, host label, overridden preset values): [records sorted by
-    ranks]} of ok runs."""
-    out = defaultdict(dict)
+    ranks]} of ok runs. Per rank count: of the runs of the newest run's revision, the one with
+    the median step time (the faster of the middle two): repeats of one build (the interleaved
+    runs of a call) give one row, which a single slow run does not decide."""
+    runs = defaultdict(lambda: defaultdict(list))
     for r in recs:
         if r.get("status") != "ok" or not r.get("step_s"):
             continue
         k = (r["sweep"], r["backend"], r.get("variant") or "", machine_label(r),
              " ".join(f"{p}={v}" for p, v in sorted((r.get("params") or {}).items())))
-        prev = out[k].get(r["ranks"])
-        if prev is None or r["date"] > prev["date"]:  # the newest run per rank count
-            out[k][r["ranks"]] = r
-    return {k: [v[n] for n in sorted(v)] for k, v in out.items()}
+        runs[k][r["ranks"]].append(r)
+    out = {}
+    for k, by_ranks in runs.items():
+        out[k] = []
+        for n in sorted(by_ranks):
+            rs = by_ranks[n]
+            rev = (max(rs, key=lambda r: r["date"]).get("machine") or {}).get("revision")
+            same = sorted((r for r in rs if (r.get("machine") or {}).get("revision") == rev),
+                          key=lambda r: r["step_s"])
+            out[k].append(same[(len(same) - 1) // 2])
+    return out
 
 
 def efficiencies(rs, mode):

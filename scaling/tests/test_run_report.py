@@ -71,6 +71,19 @@ def test_fluid_halo_bytes_reach_the_table_rows():
     assert rows[0]["fluid_halo_bytes_per_step"] == 2.5e6 and rows[1]["fluid_halo_bytes_per_step"] is None
 
 
+def test_a_series_row_is_the_median_run_of_the_newest_revision():
+    def run_of(rev, date, step):
+        return {"status": "ok", "step_s": step, "sweep": "cubes-weak", "backend": "cuda", "ranks": 2,
+                "date": date, "machine": {"revision": rev}}
+
+    old = [run_of("a", "2026-01-01T00:00:0" + str(i), s) for i, s in enumerate((0.5, 0.6, 0.7))]
+    new = [run_of("b", "2026-01-02T00:00:0" + str(i), s) for i, s in enumerate((3.0, 1.0, 2.0, 9.0))]
+    (rows,) = report.series(old + new).values()
+    assert [r["step_s"] for r in rows] == [2.0]  # b's four runs: the faster of the middle two
+    (rows,) = report.series(old).values()
+    assert [r["step_s"] for r in rows] == [0.6]
+
+
 def test_preset_values_can_be_overridden_and_keep_their_own_series():
     import scenes
 
