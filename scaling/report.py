@@ -244,14 +244,14 @@ def plots(recs):
         md.append(f"\n### {sweep}: load balancer on vs static partition ({backend}, {mach})\n")
         md.append("Time per step with (re)partitioning and migration included (step_s_all).\n")
         md.append("| ranks | balanced ms/step | static ms/step | gain | imbalance balanced | imbalance static | rebalances "
-                  "| migrated MB | fluid migrated MB |")
-        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+                  "| fluid re-cuts | migrated MB | fluid migrated MB |")
+        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
         for n in ns:
             b, s = vs["balanced"][n], vs["static"][n]
             tb, ts = b.get("step_s_all", b["step_s"]), s.get("step_s_all", s["step_s"])
             md.append(f"| {n} | {tb * 1e3:.2f} | {ts * 1e3:.2f} | {ts / tb:.2f}x | "
                       f"{b.get('imbalance') or 0:.3f} | {s.get('imbalance') or 0:.3f} | {b.get('rebalances')} | "
-                      f"{(b.get('migrated_bytes') or 0) / 1e6:.1f} | {(b.get('fluid_migrated_bytes') or 0) / 1e6:.1f} |")
+                      f"{'-' if b.get('fluid_recuts') is None else b['fluid_recuts']} | {(b.get('migrated_bytes') or 0) / 1e6:.1f} | {(b.get('fluid_migrated_bytes') or 0) / 1e6:.1f} |")
         if plt is None:
             continue
         fig, ax = plt.subplots(figsize=(6.5, 4))

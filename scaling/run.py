@@ -195,7 +195,8 @@ def make_record(meta, launch, summary, facts, run_wall, status, note="") -> dict
         if par:
             rec["parallel"] = par
             for k in ("imbalance", "imbalance_initial", "halo_bytes_per_step", "migrated_bytes",
-                      "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "fluid_rebuilds", "rebalances", "curve"):
+                      "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "fluid_rebuilds", "fluid_recuts", "rebalances",
+                      "curve"):
                 rec[k] = par.get(k)
             rec["busy_imbalance"] = busy_imbalance(par)
         c = summary.get("contact") or {}

@@ -93,6 +93,7 @@ class MpiFluidExchange final : public FluidExchange {
     // decomposition's grid.
     resize_for_overwrite(dest_, n);
     if (dec_.splitters.empty() || rebalance_) {  // a new cut, which computes the keys anyway
+      recuts_ += !dec_.splitters.empty();
       std::span<const double> cost = p.cost;
       if (p.cost.size() != p.size()) {  // not measured yet
         resize_for_overwrite(cost_, n);
@@ -220,7 +221,7 @@ class MpiFluidExchange final : public FluidExchange {
   FluidTraffic traffic() override {
     std::int64_t b[3] = {halo_bytes_, migrated_bytes_, band_bytes_};
     MPI_Allreduce(MPI_IN_PLACE, b, 3, MPI_INT64_T, MPI_SUM, comm_);
-    return {evaluations_, rebuilds_, b[0], b[1], b[2], skin_};
+    return {evaluations_, rebuilds_, recuts_, b[0], b[1], b[2], skin_};
   }
 
  private:
@@ -469,7 +470,7 @@ class MpiFluidExchange final : public FluidExchange {
   // Traffic (this rank's bytes sent): evaluations counts keep() calls and the distribute()
   // calls no keep() asked for (the first, and the one after a load_state).
   bool after_keep_ = false;  // the next distribute() is the one a keep() asked for
-  std::int64_t evaluations_ = 0, rebuilds_ = 0;
+  std::int64_t evaluations_ = 0, rebuilds_ = 0, recuts_ = 0;
   std::int64_t halo_bytes_ = 0, migrated_bytes_ = 0, band_bytes_ = 0;
   Decomposition dec_;
   std::unique_ptr<MigratePlan> migrate_;  // re-planned at each distribute(): buffers kept

@@ -8,6 +8,7 @@ void ParallelRecord::set_fluid(const FluidTraffic& t) {
                         : 0.0;
   fluid_migrated_bytes = t.migrated_bytes + t.band_bytes;
   fluid_rebuilds = t.rebuilds;
+  fluid_recuts = t.recuts;
   fluid_skin = t.skin;
 }
 
@@ -25,6 +26,7 @@ Json ParallelRecord::to_json() const {
   j["fluid_halo_bytes_per_step"] = fluid_halo_bytes_per_step;
   j["fluid_migrated_bytes"] = fluid_migrated_bytes;
   j["fluid_rebuilds"] = fluid_rebuilds;
+  j["fluid_recuts"] = fluid_recuts;
   j["fluid_skin"] = fluid_skin;
   j["setup_s"] = setup_s;
   Json ov = Json::array(), ot = Json::array();

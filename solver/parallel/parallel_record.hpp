@@ -19,6 +19,7 @@
 //   fluid_migrated_bytes the fluid's bytes at its layout rebuilds: particles to new owners and
 //                        the allgathered border band cells (bytes x (ranks - 1))
 //   fluid_rebuilds       the fluid's layout rebuilds (distribute() calls), the first included
+//   fluid_recuts         of them, those that cut the fluid's partition again
 //   fluid_skin           the fluid's ghost-band skin at the end [m] (widens when rebuilds are dear)
 //   owned_vertices, owned_tets   per rank: owned free vertices, home free tets (at the end)
 //   phases_max, phases_mean      per phase, seconds over ranks (kParallelPhases), of the
@@ -94,7 +95,7 @@ struct ParallelRecord {
   double halo_bytes_per_step = 0;
   double fluid_halo_bytes_per_step = 0;
   std::int64_t fluid_migrated_bytes = 0;
-  std::int64_t fluid_rebuilds = 0;
+  std::int64_t fluid_rebuilds = 0, fluid_recuts = 0;
   double fluid_skin = 0;
   double setup_s = 0;
   std::vector<std::int64_t> owned_vertices, owned_tets;

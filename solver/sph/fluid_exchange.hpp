@@ -51,6 +51,7 @@ struct FluidParticles {
 struct FluidTraffic {
   std::int64_t evaluations = 0;     // fluid evaluations (SphStage::compute() calls)
   std::int64_t rebuilds = 0;        // distribute() calls
+  std::int64_t recuts = 0;          // of them, those that cut the partition again
   std::int64_t halo_bytes = 0;      // ghost slots filled at each distribute() and refreshed
   std::int64_t migrated_bytes = 0;  // particles moved to new owners at each distribute()
   std::int64_t band_bytes = 0;      // border band cells allgathered at each distribute()

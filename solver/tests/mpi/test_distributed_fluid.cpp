@@ -444,6 +444,9 @@ TEST(DistributedFluid, StageTrafficPerEvaluation) {
   r.set_fluid(t);
   EXPECT_EQ(t.evaluations, kSteps + 1);
   EXPECT_GE(t.rebuilds, 1);  // the first layout, then the skin rule and the cuts
+  // Threshold 0: a new cut at each measurement (steps 50 and 100) where the costs differ.
+  EXPECT_EQ(t.recuts, size_of() > 1 ? 2 : 0);
+  EXPECT_EQ(r.fluid_recuts, t.recuts);
   if (size_of() == 1) {
     EXPECT_EQ(r.fluid_halo_bytes_per_step, 0.0);
     EXPECT_EQ(r.fluid_migrated_bytes, 0);
@@ -453,10 +456,10 @@ TEST(DistributedFluid, StageTrafficPerEvaluation) {
   }
   if (rank_of() == 0)
     std::printf(
-        "[fluid stage traffic, %d ranks, %d steps] %ld rebuilds, halo %.0f B per evaluation, "
-        "migrated %ld B\n",
-        size_of(), kSteps, static_cast<long>(t.rebuilds), r.fluid_halo_bytes_per_step,
-        static_cast<long>(r.fluid_migrated_bytes));
+        "[fluid stage traffic, %d ranks, %d steps] %ld rebuilds (%ld cuts), halo %.0f B per "
+        "evaluation, migrated %ld B\n",
+        size_of(), kSteps, static_cast<long>(t.rebuilds), static_cast<long>(t.recuts),
+        r.fluid_halo_bytes_per_step, static_cast<long>(r.fluid_migrated_bytes));
 }
 
 // A dam break in a slab periodic in z (fluid.periodic_z, walls in x and y only, gravity along

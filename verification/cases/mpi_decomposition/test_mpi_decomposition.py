@@ -15,7 +15,8 @@ from harness.qdemsph import mpirun_command
 
 HERE = Path(__file__).resolve().parent
 PARALLEL_KEYS = {"ranks", "curve", "rebalances", "rebuilds", "contact_slack", "imbalance", "imbalance_initial", "migrated_bytes",
-                 "halo_bytes_per_step", "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "fluid_rebuilds", "fluid_skin", "setup_s",
+                 "halo_bytes_per_step", "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "fluid_rebuilds", "fluid_recuts", "fluid_skin",
+                 "setup_s",
                  "owned_vertices",
                  "owned_tets", "phases_max", "phases_mean", "rebalance_log", "phases_by_rank"}
 PHASES = {"elements", "integration", "contact", "sph", "halo", "migration", "balance", "output"}
