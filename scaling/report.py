@@ -70,7 +70,8 @@ def series(recs):
     """{(sweep, backend, variant, host label, overridden preset values): [records sorted by
     ranks]} of ok runs. Per rank count: of the runs of the newest run's revision, the one with
     the median step time (the faster of the middle two): repeats of one build (the interleaved
-    runs of a call) give one row, which a single slow run does not decide."""
+    runs of a call) give one row, which a single slow run does not decide. The row carries
+    those runs' step times (`step_s_runs`, sorted): their spread is the host's and the run's."""
     runs = defaultdict(lambda: defaultdict(list))
     for r in recs:
         if r.get("status") != "ok" or not r.get("step_s"):
@@ -86,8 +87,13 @@ def series(recs):
             rev = (max(rs, key=lambda r: r["date"]).get("machine") or {}).get("revision")
             same = sorted((r for r in rs if (r.get("machine") or {}).get("revision") == rev),
                           key=lambda r: r["step_s"])
-            out[k].append(same[(len(same) - 1) // 2])
+            out[k].append(dict(same[(len(same) - 1) // 2], step_s_runs=[r["step_s"] for r in same]))
     return out
+
+
+def spread(runs) -> str:
+    """The runs' step times for a table cell: "k: min-max" ms, or "1" for a single run."""
+    return "1" if len(runs) == 1 else f"{len(runs)}: {min(runs) * 1e3:.2f}-{max(runs) * 1e3:.2f}"
 
 
 def efficiencies(rs, mode):
@@ -95,7 +101,8 @@ def efficiencies(rs, mode):
     rows = []
     for r in rs:
         n = r["ranks"]
-        row = {"ranks": n, "step_s": r["step_s"], "imbalance": r.get("imbalance"),
+        row = {"ranks": n, "step_s": r["step_s"], "runs": r.get("step_s_runs") or [r["step_s"]],
+               "imbalance": r.get("imbalance"),
                "busy_imbalance": r.get("busy_imbalance"),
                "halo_bytes_per_step": r.get("halo_bytes_per_step"),
                "fluid_halo_bytes_per_step": r.get("fluid_halo_bytes_per_step"), "size": r["size"]}
@@ -163,14 +170,14 @@ def plots(recs):
         if cop:
             md.append("E vs 1 = node x decomposition: *node* = t(1) / t(N copies of the 1-rank run at once, "
                       "one per core), *decomposition* = t(N copies) / t(N ranks).\n")
-        md.append("| ranks | tets | particles | ms/step | E vs 1 | E vs 8 | node | decomposition | imbalance | busy imbalance "
-                  "| halo MB/step | fluid halo MB/step |")
-        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+        md.append("| ranks | tets | particles | ms/step | runs: ms/step | E vs 1 | E vs 8 | node | decomposition | imbalance "
+                  "| busy imbalance | halo MB/step | fluid halo MB/step |")
+        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
         for row in rows:
             f = lambda v, s="{:.3f}": "" if v is None else s.format(v)  # noqa: E731
             mb = lambda v: f(None if v is None else v / 1e6, "{:.2f}")  # noqa: E731
             md.append(f"| {row['ranks']} | {row['size']['n_tets']:,} | {row['size']['n_particles']:,} | "
-                      f"{row['step_s'] * 1e3:.2f} | {f(row.get('E1'))} | {f(row.get('E8'))} | "
+                      f"{row['step_s'] * 1e3:.2f} | {spread(row['runs'])} | {f(row.get('E1'))} | {f(row.get('E8'))} | "
                       f"{f(row.get('node'))} | {f(row.get('decomp'))} | "
                       f"{f(row['imbalance'])} | {f(row.get('busy_imbalance'))} | {mb(row['halo_bytes_per_step'])} | "
                       f"{mb(row.get('fluid_halo_bytes_per_step'))} |")
@@ -183,7 +190,10 @@ def plots(recs):
         if plt is None or len(rs) < 2:  # a single rank count: the table says it all
             continue
         fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
-        ax[0].plot(ranks, [r["step_s"] * 1e3 for r in rs], "o-", label="measured")
+        ax[0].errorbar(ranks, [r["step_s"] * 1e3 for r in rs],
+                       yerr=[[(r["step_s"] - min(r["step_s_runs"])) * 1e3 for r in rs],
+                             [(max(r["step_s_runs"]) - r["step_s"]) * 1e3 for r in rs]],
+                       fmt="o-", capsize=3, label="measured (median run; bars: the runs' range)")
         ax[0].set_xscale("log", base=2)
         ax[0].set_xlabel("ranks" + (" (GPUs)" if backend == "cuda" else " (cores)"))
         ax[0].set_ylabel("time per step [ms]")

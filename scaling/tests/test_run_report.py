@@ -80,6 +80,8 @@ def test_a_series_row_is_the_median_run_of_the_newest_revision():
     new = [run_of("b", "2026-01-02T00:00:0" + str(i), s) for i, s in enumerate((3.0, 1.0, 2.0, 9.0))]
     (rows,) = report.series(old + new).values()
     assert [r["step_s"] for r in rows] == [2.0]  # b's four runs: the faster of the middle two
+    assert rows[0]["step_s_runs"] == [1.0, 2.0, 3.0, 9.0]
+    assert report.spread(rows[0]["step_s_runs"]) == "4: 1000.00-9000.00" and report.spread([1.0]) == "1"
     (rows,) = report.series(old).values()
     assert [r["step_s"] for r in rows] == [0.6]
 
