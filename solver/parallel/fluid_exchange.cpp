@@ -21,6 +21,9 @@
 namespace qdemsph {
 namespace {
 
+// The deepest box depth_of() tries, in band cells on each side.
+constexpr int kMaxDepth = 8;
+
 std::vector<CommField> fields_of(FluidParticles& p) {
   return {comm_field(p.x),    comm_field(p.v),   comm_field(p.rho), comm_field(p.m),
           comm_field(p.type), comm_field(p.gid), comm_field(p.key)};
@@ -106,18 +109,20 @@ class MpiFluidExchange final : public FluidExchange {
                [&](std::int64_t i) { dest_[i] = owner_of_key(dec_.splitters, curve_key_[i]); });
     } else {
       // On the standing cut, a particle whose band cell was interior at the last layout (its
-      // 5^3 box all this rank's piece, interior()) has moved less than a band cell since (no
-      // particle moved more than moved_, the largest displacement keep() saw), so it is still
-      // inside that box and stays, without its key (most particles: rank 0's owners of the
-      // 359 k-particle dam break on 2 ranks of one thread, 14.6 -> 3.1 ms a rebuild).
-      const bool known = p.slot.size() == p.size() && n == deep_n_ && moved_ < deep_band_;
+      // box of depth d, (2 d + 1)^3 band cells, all this rank's piece: depth_of()) that has
+      // moved less than d - 1 band cells since (at most reached_ times its reach, keep()) is
+      // still inside that box and stays, without its key (most particles: rank 0's owners of
+      // the 359 k-particle dam break on 2 ranks of one thread, 14.6 -> 3.1 ms a rebuild).
+      const bool known = p.slot.size() == p.size() && n == depth_n_;
       for_each(HostExec{}, n, [&](std::int64_t i) {
-        dest_[i] =
-            known && deep_[p.slot[i]] ? me_ : owner_of_key(dec_.splitters, dec_.grid.key(p.x[i]));
+        const std::int64_t s = known ? p.slot[i] : -1;
+        const bool stays =
+            s >= 0 && depth_[s] > 0 && reached_ * reach_[s] < (depth_[s] - 1) * depth_band_;
+        dest_[i] = stays ? me_ : owner_of_key(dec_.splitters, dec_.grid.key(p.x[i]));
       });
     }
     rebalance_ = false;
-    moved_ = kUnknown;
+    reached_ = kUnknown;
 
     // Owned particles to the owners of their positions, in place (a rank keeps nearly all of
     // them): those that leave are gathered and sent, the holes they leave are filled from the
@@ -170,16 +175,16 @@ class MpiFluidExchange final : public FluidExchange {
     return nown;
   }
 
-  bool keep(double moved, double load) override {
+  bool keep(double reached, double load) override {
     ++steps_;
     ++evaluations_;
     time_step();
     if (rebalance_due(load)) {
       rebalance_ = true;
     } else {
-      MPI_Allreduce(MPI_IN_PLACE, &moved, 1, MPI_DOUBLE, MPI_MAX, comm_);
-      if (moved <= skin_ / 2) return true;
-      moved_ = moved;
+      MPI_Allreduce(MPI_IN_PLACE, &reached, 1, MPI_DOUBLE, MPI_MAX, comm_);
+      if (reached <= 1) return true;
+      reached_ = reached;
       widen_skin();
     }
     after_keep_ = true;
@@ -187,6 +192,7 @@ class MpiFluidExchange final : public FluidExchange {
   }
   bool wants_load() const override { return every_ > 0 && (steps_ + 1) % every_ == 0; }
   double skin() const override { return skin_; }
+  const std::vector<double>& reach() const override { return reach_; }
 
   const std::vector<std::int64_t>& send_slots() const override {
     return halo_->engine().send_index();
@@ -229,7 +235,7 @@ class MpiFluidExchange final : public FluidExchange {
   struct GhostBlock {                     // find_ghost_ranks(): one block of particles'
     KeyIndex cells;                       // distinct band cells
     std::vector<std::uint64_t> cell_key;  // per cell: its key
-    std::vector<std::uint8_t> border;     // per cell: not interior
+    std::vector<std::uint8_t> depth;      // per cell: depth_of() (0: on the piece's border)
     KeyIndex in_piece;                    // interior(): tree cells tested, and the answers
     std::vector<std::uint8_t> in_piece_value;
     std::vector<std::int64_t> cell_off;  // per cell: a range of cell_ranks
@@ -271,7 +277,7 @@ class MpiFluidExchange final : public FluidExchange {
       GhostBlock& w = g.block[b];
       w.cells.clear();
       w.cell_key.clear();
-      w.border.clear();
+      w.depth.clear();
       w.in_piece.clear();  // the decomposition may be new
       w.in_piece_value.clear();
       std::uint64_t last = 0;
@@ -285,7 +291,7 @@ class MpiFluidExchange final : public FluidExchange {
         g.cell_of[i] = w.cells.insert(k);
         if (g.cell_of[i] == static_cast<std::int64_t>(w.cell_key.size())) {
           w.cell_key.push_back(k);
-          w.border.push_back(!interior(k, w));
+          w.depth.push_back(depth_of(k, w));
         }
       }
     }
@@ -294,7 +300,7 @@ class MpiFluidExchange final : public FluidExchange {
     std::vector<std::pair<std::uint64_t, std::int64_t>> pub;
     for (std::int64_t b = 0; b < nb; ++b)
       for (std::size_t c = 0; c < g.block[b].cell_key.size(); ++c)
-        if (g.block[b].border[c]) pub.push_back({g.block[b].cell_key[c], me_});
+        if (g.block[b].depth[c] == 0) pub.push_back({g.block[b].cell_key[c], me_});
     std::sort(pub.begin(), pub.end());
     pub.erase(std::unique(pub.begin(), pub.end()), pub.end());
     g.occupied.clear();
@@ -309,16 +315,18 @@ class MpiFluidExchange final : public FluidExchange {
         g.occupied_off.push_back(static_cast<std::int64_t>(k));
     g.occupied_off.push_back(static_cast<std::int64_t>(g.occupied.size()));
     // Per cell of each block, the other ranks within the band (sorted, once each); per
-    // particle, its cell's count (then the offsets), and whether its cell is interior (deep_).
+    // particle, its cell's count (then the offsets), its cell's depth and its reach.
+    const double w_min = std::min(band_.band, band_.band_z);
     resize_for_overwrite(g.off, nown + 1);
-    resize_for_overwrite(deep_, nown);
+    resize_for_overwrite(depth_, nown);
+    resize_for_overwrite(reach_, nown);
 #pragma omp parallel for schedule(static) if (nb > 1)
     for (std::int64_t b = 0; b < nb; ++b) {
       GhostBlock& w = g.block[b];
       w.cell_off.assign(1, 0);
       w.cell_ranks.clear();
       for (std::size_t c = 0; c < w.cell_key.size(); ++c) {
-        if (w.border[c]) {
+        if (w.depth[c] == 0) {
           const std::size_t first = w.cell_ranks.size();
           band_.for_each_neighbour(band_cell_of_key(w.cell_key[c]), [&](std::uint64_t k) {
             const std::int64_t d = g.occupied_cells.find(k);
@@ -334,11 +342,12 @@ class MpiFluidExchange final : public FluidExchange {
       }
       for (std::int64_t i = lo(b); i < lo(b + 1); ++i) {
         g.off[i] = w.cell_off[g.cell_of[i] + 1] - w.cell_off[g.cell_of[i]];
-        deep_[i] = !w.border[g.cell_of[i]];
+        depth_[i] = w.depth[g.cell_of[i]];
+        reach_[i] = reach_of(depth_[i], w_min);
       }
     }
-    deep_n_ = nown;
-    deep_band_ = std::min(band_.band, band_.band_z);
+    depth_n_ = nown;
+    depth_band_ = w_min;
     exclusive_scan(HostExec{}, View<std::int64_t>{g.off.data(), nown + 1}, nown);
     // Per particle, its cell's ranks.
     resize_for_overwrite(g.ranks, g.off[nown]);
@@ -351,23 +360,40 @@ class MpiFluidExchange final : public FluidExchange {
     }
   }
 
-  // True when every point of the 5^3 band cells around cell `key` belongs to this rank: the
-  // box lies in at most 2 x 2 x 2 cells of some tree level, and each of their curve segments
-  // (keys are hierarchical, sfc.hpp) lies in this rank's piece. Conservative: false may be
-  // answered for an interior cell (it is then published needlessly), never true for another.
-  // Periodic z: a box across the seam is not interior.
-  bool interior(std::uint64_t key, GhostBlock& memo) const {
+  // The depth of band cell `key` in this rank's piece: the largest k of 2, 4, 8 whose box of
+  // (2 k + 1)^3 band cells around it is interior(), 0 when none is (the cell is on the piece's
+  // border: another rank's particle may be within the ghost band of its particles).
+  int depth_of(std::uint64_t key, GhostBlock& memo) const {
+    int d = 0;
+    for (int k = 2; k <= kMaxDepth && interior(key, k, memo); k *= 2) d = k;
+    return d;
+  }
+  // How far a particle of a cell of depth d (depth_of) may move while the layout stands. At the
+  // layout every other rank's particle that is no ghost of this rank was at least max(d, 2)
+  // band cells of width w from it: beyond the ghost band of its cell (2 cells), or outside its
+  // box (d cells). Two particles of different ranks, neither the other's ghost, stay beyond
+  // the kernel support while each has moved at most half of its distance less the support:
+  // skin / 2 on the border (2 w = support + skin), more inside. Larger reaches let the layout
+  // stand longer where the flow is far from the cut (a dam break's surge front).
+  double reach_of(int d, double w) const { return (std::max(d, 2) * w - support_) / 2; }
+
+  // True when every point of the (2 k + 1)^3 band cells around cell `key` belongs to this rank:
+  // the box lies in at most 2 x 2 x 2 cells of some tree level, and each of their curve
+  // segments (keys are hierarchical, sfc.hpp) lies in this rank's piece. Conservative: false
+  // may be answered for an interior cell (it is then published needlessly), never true for
+  // another. Periodic z: a box across the seam is not interior.
+  bool interior(std::uint64_t key, int k, GhostBlock& memo) const {
     const SfcGrid& g = dec_.grid;
     const std::uint64_t first = dec_.splitters[me_], last = dec_.splitters[me_ + 1];
     if (first >= last) return false;
     const BandCell b = band_cell_of_key(key);
     const std::int64_t* c = b.i;
-    if (band_.nz > 0 && (c[2] < 2 || c[2] + 3 > band_.nz)) return false;
+    if (band_.nz > 0 && (c[2] < k || c[2] + k + 1 > band_.nz)) return false;
     // The box's finest cells, one more on each side against round-off in band_cell's floor.
     std::uint32_t lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
-      lo[a] = g.coord(band_.lo(c[a] - 2, a), g.lo[a]);
-      hi[a] = g.coord(band_.lo(c[a] + 3, a), g.lo[a]);
+      lo[a] = g.coord(band_.lo(c[a] - k, a), g.lo[a]);
+      hi[a] = g.coord(band_.lo(c[a] + k + 1, a), g.lo[a]);
       lo[a] -= lo[a] > 0;
       hi[a] += hi[a] + 1 < g.side();
     }
@@ -484,13 +510,15 @@ class MpiFluidExchange final : public FluidExchange {
   std::vector<int> out_dest_;             // per leaving particle: its new owner
   FluidParticles out_, in_;               // the particles that leave, and those that arrive
   GhostScratch g_;
-  // The owned particles of the last layout, by slot, whose band cell was interior (no other
-  // rank's particle within two band cells of width deep_band_); moved_: every particle's
-  // displacement since, at most (keep()), unknown after distribute() until keep() measures it.
+  // The owned particles of the last layout, by slot: their band cells' depth (depth_of(), no
+  // other rank's particle within that many band cells of width depth_band_) and their reach
+  // (reach_of()); reached_: every particle's displacement since, at most, as a multiple of its
+  // reach (keep()), unknown after distribute() until keep() measures it.
   static constexpr double kUnknown = std::numeric_limits<double>::infinity();
-  std::vector<std::uint8_t> deep_;
-  std::int64_t deep_n_ = -1;
-  double deep_band_ = 0, moved_ = kUnknown;
+  std::vector<std::uint8_t> depth_;
+  std::vector<double> reach_;
+  std::int64_t depth_n_ = -1;
+  double depth_band_ = 0, reached_ = kUnknown;
 };
 
 }  // namespace

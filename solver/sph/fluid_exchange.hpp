@@ -5,8 +5,9 @@
 // their position at the last distribute()) followed by ghosts: copies of other ranks'
 // particles within one kernel support + skin of an owned particle then. The layout (who owns
 // what, who holds which ghosts) stands while keep() says so: while no particle has moved more
-// than skin / 2 since distribute(), every particle within one support of an owned particle,
-// and every particle of an owned particle's neighbour cell, is still held. Meanwhile ghost
+// than its reach since distribute() (skin / 2 near another rank's particles, more deeper in
+// the rank's piece: reach()), every particle within one support of an owned particle is still
+// held. Meanwhile ghost
 // slots are refreshed from their owners: positions and velocities at each step, then after
 // each pass that changes what the next pass reads (density, then wall pressure).
 //
@@ -69,15 +70,19 @@ class FluidExchange {
   // (sph.rebuild.owners, .migrate, .ghosts, .halo). Collective.
   virtual std::int64_t distribute(FluidParticles& p, PhaseTimers& timers) = 0;
   // At each step after the first distribute(): true when the layout still holds, given this
-  // rank's largest displacement of an owned particle since distribute() and its owned
-  // particles' cost in the last evaluation (0: not measured) (false: the largest displacement
-  // over the ranks exceeds skin() / 2, or the partition is due to be cut again; call
-  // distribute()). The same answer on every rank. Collective.
-  virtual bool keep(double moved, double load) = 0;
+  // rank's largest displacement of an owned particle since distribute() as a multiple of its
+  // reach (`reached`) and its owned particles' cost in the last evaluation (0: not measured)
+  // (false: some particle over the ranks has moved more than its reach, or the partition is due
+  // to be cut again; call distribute()). The same answer on every rank. Collective.
+  virtual bool keep(double reached, double load) = 0;
   // Whether the next keep() reads `load` (a measurement is due); otherwise 0 will do.
   virtual bool wants_load() const = 0;
   // The ghost band's margin beyond the kernel support.
   virtual double skin() const = 0;
+  // Per owned layout slot of the last distribute(): how far the particle may move while the
+  // layout stands (skin() / 2 where another rank's particles are within the ghost band, more
+  // where none is for several band cells around).
+  virtual const std::vector<double>& reach() const = 0;
   // Owned values -> ghost slots of the layout distribute() returned, in records the caller
   // packs where its arrays live (a GPU stage on the device): fill send_buffer(stride) with
   // one record of `stride` bytes per entry of send_slots() (owned layout slots; they stand

@@ -196,7 +196,7 @@ class SphStage final : public FluidStage {
         exec_sync(Exec{});  // the work before is the step's (timers_ below)
         auto s = timers_.scope("sph.halo");
         auto s1 = timers_.scope("sph.halo.skin");
-        keep = laid_out_ && ex_->keep(moved(), ex_->wants_load() ? owned_cost() : 0.0);
+        keep = laid_out_ && ex_->keep(reached(), ex_->wants_load() ? owned_cost() : 0.0);
       }
       if (keep) {
         refresh_positions();
@@ -472,10 +472,10 @@ class SphStage final : public FluidStage {
   const SphParams& params() const override { return P_; }
   std::size_t device_bytes() const override {
     return x_.bytes() + v_.bytes() + a_.bytes() + rho_.bytes() + p_.bytes() + drho_.bytes() +
-           pr_.bytes() + m_.bytes() + x0_.bytes() + type_.bytes() + gid_.bytes() + key_.bytes() +
-           slot_.bytes() + tmp3_.bytes() + tmpd_.bytes() + tmpu_.bytes() + tmpt_.bytes() +
-           tmpi_.bytes() + send_.bytes() + inv_.bytes() + pack_.bytes() + cost_.bytes() +
-           keys_.bytes() + start_.bytes() + order_.bytes() + scratch_.bytes() +
+           pr_.bytes() + m_.bytes() + x0_.bytes() + reach_.bytes() + type_.bytes() + gid_.bytes() +
+           key_.bytes() + slot_.bytes() + tmp3_.bytes() + tmpd_.bytes() + tmpu_.bytes() +
+           tmpt_.bytes() + tmpi_.bytes() + send_.bytes() + inv_.bytes() + pack_.bytes() +
+           cost_.bytes() + keys_.bytes() + start_.bytes() + order_.bytes() + scratch_.bytes() +
            (coupling_ ? coupling_->bytes() : 0);
   }
 
@@ -590,11 +590,14 @@ class SphStage final : public FluidStage {
         },
         -std::numeric_limits<double>::infinity());
     // The neighbour grid: the window of the whole box's cells that holds this rank's particles,
-    // widened by the cells they can reach while the layout stands (skin / 2), so none leaves it
-    // (coordinates outside a window are clamped into its border cells). A periodic z keeps all
-    // its cells (they wrap: a rank at the seam holds ghosts from the other side).
+    // widened by the cells they can reach while the layout stands (the largest reach), so none
+    // leaves it (coordinates outside a window are clamped into its border cells). A periodic z
+    // keeps all its cells (they wrap: a rank at the seam holds ghosts from the other side).
     const auto cell = [&](double x, int a) { return std::isfinite(x) ? grid_all_.coord(x, a) : 0; };
-    const int margin = static_cast<int>(std::ceil(0.5 * ex_->skin() * grid_all_.inv_cell));
+    const std::vector<double>& reach = ex_->reach();
+    const double most = std::accumulate(reach.begin(), reach.end(), 0.5 * ex_->skin(),
+                                        [](double a, double b) { return std::max(a, b); });
+    const int margin = static_cast<int>(std::ceil(most * grid_all_.inv_cell));
     int lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
     for (int a = 0; a < 3; ++a) {
       lo[a] = std::max(cell(-e[a], a) - margin, 0);
@@ -647,6 +650,7 @@ class SphStage final : public FluidStage {
     gather(key_, q.key);
     slot_.assign(ord_);
     gather3(x0_, q.x, nown, nullptr);  // the owned positions by slot
+    reach_.assign(reach);
     send_.assign(ex_->send_slots());
     inv_.resize(n_);
     cost_.resize(n_);
@@ -663,16 +667,19 @@ class SphStage final : public FluidStage {
   }
 
   // Distributed: the largest displacement of an owned particle since the last redistribute()
-  // (across a periodic z's seam, the nearest image's).
-  double moved() {
+  // (across a periodic z's seam, the nearest image's) as a multiple of its reach.
+  double reached() {
     const auto x = x_.cview(), x0 = x0_.cview();
     const auto slot = slot_.cview();
+    const auto reach = reach_.cview();
     const std::int64_t nown = n_own_;
     const CellGrid g = grid_all_;
     return std::sqrt(reduce_max(
         Exec{}, nf_ + nml_,  // fluid and markers, the groups first in order (walls do not move)
         QDEMSPH_LAMBDA(std::int64_t i) {
-          return slot[i] < nown ? norm2(g.nearest(x[i] - x0[slot[i]])) : 0.0;
+          if (slot[i] >= nown) return 0.0;
+          const double r = reach[slot[i]];
+          return norm2(g.nearest(x[i] - x0[slot[i]])) / (r * r);
         },
         0.0));
   }
@@ -834,8 +841,9 @@ class SphStage final : public FluidStage {
   double wall_volume_ = 0;   // dx^3
   Vec3Buffer x_{S}, v_{S}, a_{S}, tmp3_{S};
   Buffer<double> rho_{S}, p_{S}, drho_{S}, m_{S}, tmpd_{S};
-  Vec3Buffer x0_{S};      // distributed: owned positions at the last redistribute(), by slot
-  Buffer<double> pr_{S};  // p / rho^2 of this step (set after the sort, not carried over)
+  Vec3Buffer x0_{S};         // distributed: owned positions at the last redistribute(), by slot
+  Buffer<double> reach_{S};  // distributed: how far each may move from there (FluidExchange)
+  Buffer<double> pr_{S};     // p / rho^2 of this step (set after the sort, not carried over)
   Buffer<std::uint8_t> type_{S}, tmpt_{S};
   Buffer<std::uint64_t> gid_{S}, key_{S}, tmpu_{S};
   Buffer<std::int64_t> slot_{S}, tmpi_{S};

@@ -24,6 +24,7 @@
 #include <array>
 #include <cstdio>
 #include <numeric>
+#include <set>
 #include <string>
 
 #include "core/error.hpp"
@@ -416,8 +417,9 @@ TEST(DistributedFluid, StandingCutRebuildOwnsWhatTheFullSearchOwns) {
   FluidParticles moved = p;
   p.slot.resize(n0);
   std::iota(p.slot.begin(), p.slot.end(), std::int64_t{0});
-  ASSERT_FALSE(known->keep(d, 0.0));
-  ASSERT_FALSE(full->keep(d, 0.0));
+  const double reached = d / (0.5 * known->skin());  // a border particle's reach: skin / 2
+  ASSERT_FALSE(known->keep(reached, 0.0));
+  ASSERT_FALSE(full->keep(reached, 0.0));
   const std::int64_t n1 = known->distribute(p, parts);
   EXPECT_EQ(full->distribute(moved, parts), n1);
   EXPECT_EQ(std::vector<std::uint64_t>(p.gid.begin(), p.gid.begin() + n1),
@@ -428,6 +430,72 @@ TEST(DistributedFluid, StandingCutRebuildOwnsWhatTheFullSearchOwns) {
     changed += std::find(q.gid.begin(), q.gid.begin() + n0, p.gid[i]) == q.gid.begin() + n0;
   MPI_Allreduce(MPI_IN_PLACE, &changed, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
   if (size_of() > 1) EXPECT_GT(changed, 0);
+}
+
+// While no particle has moved more than its reach, every particle of another rank within the
+// kernel support of an owned one is held by this rank. Each owned particle moves its whole
+// reach towards the other ranks' particles (their centroid), and the pairs are checked
+// against all of them. Deep particles may move more than the border's skin / 2.
+TEST(DistributedFluid, ParticlesWithinTheirReachKeepEveryNeighbourHeld) {
+  const FluidSetup f = dam_setup();
+  const int me = rank_of(), np = size_of();
+  auto ex = make_fluid_exchange(options(1000, 0.1), f);
+  FluidParticles p = share_of(f);
+  PhaseTimers parts;
+  const std::int64_t nown = ex->distribute(p, parts);
+  const std::vector<double>& reach = ex->reach();
+  ASSERT_EQ(static_cast<std::int64_t>(reach.size()), nown);
+  // Every rank's owned particles (id, position, rank) before and after the move.
+  auto all_of = [&](const std::vector<Vec3>& x) {
+    std::vector<double> mine;
+    for (std::int64_t i = 0; i < nown; ++i)
+      mine.insert(mine.end(), {x[i].x, x[i].y, x[i].z, static_cast<double>(p.gid[i])});
+    int n = static_cast<int>(mine.size());
+    std::vector<int> counts(np), offs(np + 1, 0);
+    MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+    for (int r = 0; r < np; ++r) offs[r + 1] = offs[r] + counts[r];
+    std::vector<double> all(offs[np]);
+    MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), offs.data(), MPI_DOUBLE,
+                   MPI_COMM_WORLD);
+    std::vector<int> rank(all.size() / 4);
+    for (int r = 0; r < np; ++r)
+      for (int k = offs[r] / 4; k < offs[r + 1] / 4; ++k) rank[k] = r;
+    return std::pair{all, rank};
+  };
+  const auto [before, rank] = all_of(p.x);
+  Vec3 centre{};
+  double others = 0;
+  for (std::size_t k = 0; k < rank.size(); ++k)
+    if (rank[k] != me)
+      centre += Vec3{before[4 * k], before[4 * k + 1], before[4 * k + 2]}, ++others;
+  std::vector<Vec3> x(p.x.begin(), p.x.begin() + nown);
+  double most = 0;
+  for (std::int64_t i = 0; i < nown; ++i) {
+    most = std::max(most, reach[i]);
+    if (others == 0) continue;
+    const Vec3 d = centre / others - x[i];
+    x[i] += (0.999 * reach[i] / norm(d)) * d;
+  }
+  const auto [after, rank_after] = all_of(x);
+  const std::set<std::uint64_t> held(p.gid.begin(), p.gid.end());
+  const double support = f.params.kernel.support();
+  long missing = 0;
+  for (std::int64_t i = 0; i < nown; ++i)
+    for (std::size_t k = 0; k < rank_after.size(); ++k) {
+      if (rank_after[k] == me) continue;
+      const Vec3 xj{after[4 * k], after[4 * k + 1], after[4 * k + 2]};
+      missing +=
+          norm(x[i] - xj) < support && !held.count(static_cast<std::uint64_t>(after[4 * k + 3]));
+    }
+  MPI_Allreduce(MPI_IN_PLACE, &missing, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
+  MPI_Allreduce(MPI_IN_PLACE, &most, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  if (me == 0)
+    std::printf(
+        "[fluid reach, %d ranks] largest reach %.4f m (skin / 2 = %.4f m), %ld pairs within "
+        "the support not held\n",
+        np, most, ex->skin() / 2, missing);
+  EXPECT_EQ(missing, 0);
+  EXPECT_GT(most, ex->skin() / 2);  // some particles lie deep inside their rank's piece
 }
 
 // The stage's traffic over a run: one evaluation per compute() (the constructor's and one
