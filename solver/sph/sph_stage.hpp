@@ -574,34 +574,35 @@ class SphStage final : public FluidStage {
     part.emplace(timers_, "sph.rebuild.in");
     const std::int64_t n = static_cast<std::int64_t>(q.size());
     const std::uint64_t place = (std::uint64_t{1} << kSphKeyShift) - 1;
-    // One pass over the particles, on the threads, for their extremes: the positions' (a cell
-    // coordinate does not decrease with the position, so the extreme cells are those of the
-    // extreme positions) and the keys' buckets and places (the key sort below), where six
-    // passes over every particle's cell and three over the keys were: 4.1 -> 0.8 ms a rebuild
-    // of rank 0's ~200 k particles (the dam break of 359 k particles on 2 ranks of one thread,
-    // median of 3 runs on the 2-core VM).
+    // One pass over the particles, on the threads, for their extremes: of the positions each
+    // may reach while the layout stands (an owned particle its reach, a ghost skin / 2, a wall
+    // none; a cell coordinate does not decrease with the position, so the extreme cells are
+    // those of the extreme positions) and the keys' buckets and places (the key sort below),
+    // where six passes over every particle's cell and three over the keys were: 4.1 -> 0.8 ms a
+    // rebuild of rank 0's ~200 k particles (the dam break of 359 k particles on 2 ranks of one
+    // thread, median of 3 runs on the 2-core VM).
+    const std::vector<double>& reach = ex_->reach();
+    const double ghost_reach = 0.5 * ex_->skin();
     const auto e = reduce_max_each<9>(
         HostExec{}, n,
         [&](std::int64_t k) {
+          const double r = q.type[k] == kSphWall ? 0.0 : k < nown ? reach[k] : ghost_reach;
           const Vec3 x = q.x[k];
           const auto b = static_cast<double>(q.key[k] >> kSphKeyShift);
-          return std::array<double, 9>{
-              -x.x, -x.y, -x.z, x.x, x.y, x.z, -b, b, static_cast<double>(q.key[k] & place)};
+          return std::array<double, 9>{r - x.x, r - x.y, r - x.z,
+                                       x.x + r, x.y + r, x.z + r,
+                                       -b,      b,       static_cast<double>(q.key[k] & place)};
         },
         -std::numeric_limits<double>::infinity());
-    // The neighbour grid: the window of the whole box's cells that holds this rank's particles,
-    // widened by the cells they can reach while the layout stands (the largest reach), so none
-    // leaves it (coordinates outside a window are clamped into its border cells). A periodic z
-    // keeps all its cells (they wrap: a rank at the seam holds ghosts from the other side).
+    // The neighbour grid: the window of the whole box's cells that holds where this rank's
+    // particles can go while the layout stands, so none leaves it (coordinates outside a window
+    // are clamped into its border cells). A periodic z keeps all its cells (they wrap: a rank
+    // at the seam holds ghosts from the other side).
     const auto cell = [&](double x, int a) { return std::isfinite(x) ? grid_all_.coord(x, a) : 0; };
-    const std::vector<double>& reach = ex_->reach();
-    const double most = std::accumulate(reach.begin(), reach.end(), 0.5 * ex_->skin(),
-                                        [](double a, double b) { return std::max(a, b); });
-    const int margin = static_cast<int>(std::ceil(most * grid_all_.inv_cell));
     int lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
     for (int a = 0; a < 3; ++a) {
-      lo[a] = std::max(cell(-e[a], a) - margin, 0);
-      hi[a] = std::min(std::max(cell(e[3 + a], a), lo[a]) + margin, grid_all_.n[a] - 1);
+      lo[a] = std::max(cell(-e[a], a), 0);
+      hi[a] = std::min(std::max(cell(e[3 + a], a), lo[a]), grid_all_.n[a] - 1);
       if (a == 2 && grid_all_.period_z > 0) lo[a] = 0, hi[a] = grid_all_.n[a] - 1;
     }
     grid_ = grid_all_.window(lo, hi);
