@@ -31,6 +31,7 @@
 #include "core/exec_host.hpp"
 #include "distributed_fixture.hpp"
 #include "integrate/stepper.hpp"
+#include "parallel/collectives.hpp"
 #include "parallel/fluid_exchange.hpp"
 #include "parallel/parallel_record.hpp"
 #include "sph/fluid_setup.hpp"
@@ -445,29 +446,22 @@ TEST(DistributedFluid, ParticlesWithinTheirReachKeepEveryNeighbourHeld) {
   const std::int64_t nown = ex->distribute(p, parts);
   const std::vector<double>& reach = ex->reach();
   ASSERT_EQ(static_cast<std::int64_t>(reach.size()), nown);
-  // Every rank's owned particles (id, position, rank) before and after the move.
-  auto all_of = [&](const std::vector<Vec3>& x) {
-    std::vector<double> mine;
-    for (std::int64_t i = 0; i < nown; ++i)
-      mine.insert(mine.end(), {x[i].x, x[i].y, x[i].z, static_cast<double>(p.gid[i])});
-    int n = static_cast<int>(mine.size());
-    std::vector<int> counts(np), offs(np + 1, 0);
-    MPI_Allgather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-    for (int r = 0; r < np; ++r) offs[r + 1] = offs[r] + counts[r];
-    std::vector<double> all(offs[np]);
-    MPI_Allgatherv(mine.data(), n, MPI_DOUBLE, all.data(), counts.data(), offs.data(), MPI_DOUBLE,
-                   MPI_COMM_WORLD);
-    std::vector<int> rank(all.size() / 4);
-    for (int r = 0; r < np; ++r)
-      for (int k = offs[r] / 4; k < offs[r + 1] / 4; ++k) rank[k] = r;
-    return std::pair{all, rank};
+  // Every rank's owned particles (position, id, rank) before and after the move.
+  struct Item {
+    Vec3 x;
+    std::uint64_t gid;
+    int rank;
   };
-  const auto [before, rank] = all_of(p.x);
+  auto all_of = [&](const std::vector<Vec3>& x) {
+    std::vector<Item> mine;
+    for (std::int64_t i = 0; i < nown; ++i) mine.push_back({x[i], p.gid[i], me});
+    return allgatherv(MPI_COMM_WORLD, mine);
+  };
+  const std::vector<Item> before = all_of(p.x);
   Vec3 centre{};
   double others = 0;
-  for (std::size_t k = 0; k < rank.size(); ++k)
-    if (rank[k] != me)
-      centre += Vec3{before[4 * k], before[4 * k + 1], before[4 * k + 2]}, ++others;
+  for (const Item& it : before)
+    if (it.rank != me) centre += it.x, ++others;
   std::vector<Vec3> x(p.x.begin(), p.x.begin() + nown);
   double most = 0;
   for (std::int64_t i = 0; i < nown; ++i) {
@@ -476,17 +470,13 @@ TEST(DistributedFluid, ParticlesWithinTheirReachKeepEveryNeighbourHeld) {
     const Vec3 d = centre / others - x[i];
     x[i] += (0.999 * reach[i] / norm(d)) * d;
   }
-  const auto [after, rank_after] = all_of(x);
+  const std::vector<Item> after = all_of(x);
   const std::set<std::uint64_t> held(p.gid.begin(), p.gid.end());
   const double support = f.params.kernel.support();
   long missing = 0;
   for (std::int64_t i = 0; i < nown; ++i)
-    for (std::size_t k = 0; k < rank_after.size(); ++k) {
-      if (rank_after[k] == me) continue;
-      const Vec3 xj{after[4 * k], after[4 * k + 1], after[4 * k + 2]};
-      missing +=
-          norm(x[i] - xj) < support && !held.count(static_cast<std::uint64_t>(after[4 * k + 3]));
-    }
+    for (const Item& it : after)
+      missing += it.rank != me && norm(x[i] - it.x) < support && !held.count(it.gid);
   MPI_Allreduce(MPI_IN_PLACE, &missing, 1, MPI_LONG, MPI_SUM, MPI_COMM_WORLD);
   MPI_Allreduce(MPI_IN_PLACE, &most, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
   if (me == 0)
