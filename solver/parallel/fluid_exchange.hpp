@@ -12,9 +12,9 @@
 // longer holds: some particle moved more than its reach since (one MPI_Allreduce of the
 // largest displacement as a multiple of the reach per step; the reach is skin / 2 where another
 // rank's particles are within the ghost band, up to ~4 band cells where none is within 8), or
-// the partition is cut again (every rebalance_every
-// steps, when the owned cost's max / mean - 1 exceeds rebalance_threshold); between, the
-// ghosts' x and v are refreshed through the same HaloPlan at each step.
+// the partition is cut again (every rebalance_every steps, when the owned cost's max / mean - 1
+// exceeds rebalance_threshold); between, the ghosts' x and v are refreshed through the same
+// HaloPlan at each step.
 #pragma once
 
 #include <memory>

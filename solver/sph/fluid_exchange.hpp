@@ -7,9 +7,9 @@
 // what, who holds which ghosts) stands while keep() says so: while no particle has moved more
 // than its reach since distribute() (skin / 2 near another rank's particles, more deeper in
 // the rank's piece: reach()), every particle within one support of an owned particle is still
-// held. Meanwhile ghost
-// slots are refreshed from their owners: positions and velocities at each step, then after
-// each pass that changes what the next pass reads (density, then wall pressure).
+// held. Meanwhile ghost slots are refreshed from their owners: positions and velocities at each
+// step, then after each pass that changes what the next pass reads (density, then wall
+// pressure).
 //
 // Order key: every particle carries the key of its place in the order one rank would have it
 // in (sph_stage.hpp: (group, cell) of the last sort, then its place in that cell; before the
