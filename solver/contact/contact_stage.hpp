@@ -1097,14 +1097,13 @@ class ContactStage {
     const auto vcnt = vcnt_.cview();
     const auto vent = vent_.cview();
     const auto sl = sl_.cview();
-    const auto sh = in_.cview();
     for_each(
         Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
           // This vertex's shares: [lo, end) of the sorted ones.
           const std::int64_t lo =
-              lower_bound_index(nin, [&](std::int64_t m) { return sh[m].vertex < i; });
+              lower_bound_index(nin, [&](std::int64_t m) { return ent.in[m].vertex < i; });
           std::int64_t end = lo;
-          while (end < nin && sh[end].vertex == i) ++end;
+          while (end < nin && ent.in[end].vertex == i) ++end;
           const int b = vcnt[i], e = vcnt[i + 1];
           if (lo == end) {
             if (b < e) f.set(i, f[i] + sl[i]);
