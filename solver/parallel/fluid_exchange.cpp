@@ -113,7 +113,7 @@ class MpiFluidExchange final : public FluidExchange {
       // moved less than d - 1 band cells since (at most reached_ times its reach, keep()) is
       // still inside that box and stays, without its key (most particles: rank 0's owners of
       // the 359 k-particle dam break on 2 ranks of one thread, 14.6 -> 3.1 ms a rebuild).
-      const bool known = p.slot.size() == p.size() && n == depth_n_;
+      const bool known = p.slot.size() == p.size() && n == static_cast<std::int64_t>(depth_.size());
       for_each(HostExec{}, n, [&](std::int64_t i) {
         const std::int64_t s = known ? p.slot[i] : -1;
         const bool stays =
@@ -346,7 +346,6 @@ class MpiFluidExchange final : public FluidExchange {
         reach_[i] = reach_of(depth_[i], w_min);
       }
     }
-    depth_n_ = nown;
     depth_band_ = w_min;
     exclusive_scan(HostExec{}, View<std::int64_t>{g.off.data(), nown + 1}, nown);
     // Per particle, its cell's ranks.
@@ -518,7 +517,6 @@ class MpiFluidExchange final : public FluidExchange {
   static constexpr double kUnknown = std::numeric_limits<double>::infinity();
   std::vector<std::uint8_t> depth_;
   std::vector<double> reach_;
-  std::int64_t depth_n_ = -1;
   double depth_band_ = 0, reached_ = kUnknown;
 };
 
