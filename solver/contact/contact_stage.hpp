@@ -374,6 +374,9 @@ class ContactStage {
     ghosts_ = nfree_ > nfv_;     // free vertices other ranks own (a distributed run's rank)
     fixed_held_ = nfree_ < nv_;  // fixed bodies' vertices (their point-face hits: keep_evaluated)
     upload_edge_anchors(m);
+    std::vector<std::int64_t> every(ghosts_ ? nfv_ : 0);
+    std::iota(every.begin(), every.end(), std::int64_t{0});
+    set_share_targets(every);  // until the rank's halo narrows them (set_share_targets)
     pc_.resize(np_);
     pr_.resize(np_);
     pc_ref_.resize(np_);
@@ -427,9 +430,9 @@ class ContactStage {
   // The last evaluation's force shares of free vertices held but not owned (an MPI rank's
   // ghosts; none on one process), keys and vertices in this model's ids, in no fixed order.
   // Meanwhile each vertex's own entries are sorted and summed (gather_local): on a GPU that runs
-  // while the host reads the shares and the ranks exchange them, and add_forces merges what
-  // arrives.
-  std::vector<ContactShare> shares() {
+  // while the host reads the shares and the ranks exchange them. A vertex no other rank holds
+  // gets its sum in f now; add_forces merges the others' with what arrives.
+  std::vector<ContactShare> shares(Vec3View f) {
     if (!ghosts_) return {};
     const std::int64_t ne = 4 * n_prev_;
     const auto evc = ent_v_.cview();
@@ -458,7 +461,7 @@ class ContactStage {
     };
     compact();
     if constexpr (S == Space::Cuda) shares_mark_.record();
-    gather_local({});
+    gather_local(f);
     int count = 0;
     read_marked(&count, count_.cview().p, sizeof(int));
     std::int64_t n = count;
@@ -474,8 +477,8 @@ class ContactStage {
 
   // f[i] += contact force on vertex i, for free vertices i < n_free_vertices, of the last
   // evaluation and of `in`: shares other ranks evaluated (keys and vertices in this model's
-  // ids). Each vertex sums its entries sorted by record key, then slot: the one-rank order
-  // (deterministic, no atomics in the sums).
+  // ids; only for share targets). Each vertex sums its entries sorted by record key, then
+  // slot: the one-rank order (deterministic, no atomics in the sums).
   void add_forces(Vec3View f, const std::vector<ContactShare>& in = {}) {
     PhaseTimers scratch;
     auto scope = (timed_ ? timers_ : scratch).scope("contact.force");
@@ -484,9 +487,25 @@ class ContactStage {
       gather_local(f);
       return;
     }
-    if (!local_sorted_) gather_local({});
+    if (!local_sorted_) gather_local(f);
     merge_shares(f, in);
     local_sorted_ = false;
+  }
+
+  // The owned vertices other ranks may send shares for: those they hold (an MPI rank's halo
+  // sends them; duplicates and ghosts ignored). Their contact sums wait for the shares
+  // (merge_shares); every other vertex's goes into f as on one process. upload() makes every
+  // owned vertex a target.
+  void set_share_targets(const std::vector<std::int64_t>& held_elsewhere) {
+    std::vector<std::uint8_t> flag(nfv_, 0);
+    for (const std::int64_t i : held_elsewhere)
+      if (i >= 0 && i < nfv_) flag[i] = 1;
+    std::vector<std::int32_t> list;
+    for (std::int64_t i = 0; i < nfv_; ++i)
+      if (flag[i]) list.push_back(static_cast<std::int32_t>(i));
+    share_flag_.assign(flag);
+    share_v_.assign(list);
+    share_host_ = std::move(flag);
   }
 
   // The state between steps (contact_state.hpp): the whole history of the last force
@@ -596,7 +615,8 @@ class ContactStage {
            pen_.bytes() + pet_.bytes() + nen_.bytes() + net_.bytes() + ediss_.bytes() +
            ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() + pr_ref_.bytes() +
            cells_.bytes() + pairs_.bytes() + vgid_.bytes() + edge_anchor_.bytes() +
-           rec_tmp_.bytes() + in_.bytes() + sl_.bytes() + out_.bytes() + keep_.bytes();
+           rec_tmp_.bytes() + in_.bytes() + sl_.bytes() + share_flag_.bytes() + share_v_.bytes() +
+           out_.bytes() + keep_.bytes();
   }
 
   ContactTopology topology() const {
@@ -1032,8 +1052,8 @@ class ContactStage {
   }
 
   // Each vertex's entries of the last evaluation sorted by record key, then slot (count, scan,
-  // fill, sort) and summed: into f on one process; on an MPI rank, where other ranks' shares
-  // may follow, into sl_ (merge_shares adds them to f).
+  // fill, sort) and summed into f; on an MPI rank a share target's (other ranks' shares may
+  // follow) into sl_ (merge_shares adds them to f).
   void gather_local(Vec3View f) {
     const std::int64_t ne = 4 * n_prev_;
     if (vent_.size() < ne) vent_.resize(ne + ne / 4 + 64);  // grows only: no allocation per step
@@ -1044,7 +1064,8 @@ class ContactStage {
     const auto vcur = vcur_.view();
     const auto vent = vent_.view();
     const auto sl = sl_.view();
-    const bool into_f = !ghosts_;
+    const auto target = share_flag_.cview();
+    const bool ghosts = ghosts_;
     vcnt_.zero();  // memset: no parallel region for a loop without work
     vcur_.zero();
     for_each(
@@ -1075,21 +1096,25 @@ class ContactStage {
           }
           Vec3 s{};
           for (int k = b; k < e; ++k) s += ef[vent[k]];
-          if (into_f)
-            f.set(i, f[i] + s);
-          else
+          if (ghosts && target[i])
             sl.set(i, s);
+          else
+            f.set(i, f[i] + s);
         });
     local_sorted_ = true;
   }
 
-  // f[i] += the contact force on each free vertex: gather_local's sum, or, for a vertex that
+  // f[i] += the contact force on each share target: gather_local's sum, or, for a vertex that
   // other ranks sent shares for, its entries and those shares merged in key order and summed
   // (the one-rank order). The shares are sorted by vertex, then key, on the host (they are few).
   void merge_shares(Vec3View f, std::vector<ContactShare> in) {
     std::sort(in.begin(), in.end(), [](const ContactShare& a, const ContactShare& b) {
       return std::tie(a.vertex, a.k1, a.k2, a.slot) < std::tie(b.vertex, b.k1, b.k2, b.slot);
     });
+    for (const ContactShare& c : in)
+      if (c.vertex < 0 || c.vertex >= nfv_ || !share_host_[c.vertex])
+        throw std::logic_error("contact share for vertex " + std::to_string(c.vertex) +
+                               ", which is not a share target of this rank");
     const auto nin = static_cast<std::int64_t>(in.size());
     if (in_.size() < nin) in_.resize(nin + nin / 4 + 64);  // grows only: no allocation per step
     if (nin > 0) space_copy(in_.view().p, S, in.data(), Space::Host, sizeof(ContactShare) * nin);
@@ -1097,8 +1122,10 @@ class ContactStage {
     const auto vcnt = vcnt_.cview();
     const auto vent = vent_.cview();
     const auto sl = sl_.cview();
+    const auto targets = share_v_.cview();
     for_each(
-        Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
+        Exec{}, share_v_.size(), QDEMSPH_LAMBDA(std::int64_t k) {
+          const std::int64_t i = targets[k];
           // This vertex's shares: [lo, end) of the sorted ones.
           const std::int64_t lo =
               lower_bound_index(nin, [&](std::int64_t m) { return ent.in[m].vertex < i; });
@@ -1180,10 +1207,13 @@ class ContactStage {
   CellList<Exec> cells_;
   CandidatePairs<Exec> pairs_;
   Buffer<ContactRecord> rec_{S}, rec_tmp_{S};
-  Buffer<ContactShare> in_{S}, out_{S};  // shares received and to send (add_forces, shares)
-  Vec3Buffer sl_{S};                     // an MPI rank's local contact force sums (gather_local)
-  bool local_sorted_ = false;            // gather_local ran for the last evaluation
-  DeviceMark shares_mark_;               // after the shares' compaction (shares, read_marked)
+  Buffer<ContactShare> in_{S}, out_{S};   // shares received and to send (add_forces, shares)
+  Vec3Buffer sl_{S};                      // an MPI rank's local contact force sums (gather_local)
+  Buffer<std::uint8_t> share_flag_{S};    // per owned vertex: a share target (set_share_targets)
+  Buffer<std::int32_t> share_v_{S};       // the share targets, increasing
+  std::vector<std::uint8_t> share_host_;  // share_flag_ on the host (merge_shares checks)
+  bool local_sorted_ = false;             // gather_local ran for the last evaluation
+  DeviceMark shares_mark_;                // after the shares' compaction (shares, read_marked)
   Buffer<int> keep_{S};
   bool timed_ = false;  // the last evaluation was a dynamic step
   Buffer<int> ent_v_{S}, vcnt_{S}, vcur_{S}, vent_{S}, count_{S};

@@ -142,7 +142,8 @@ class Backend {
   // CUDA): pack_halo writes 6 doubles (x, v) per entry of send_index, item-major, to `out`
   // in memory space `where`; unpack_halo reads n_recv such records from `in` (in `where`)
   // into vertices recv_base + k. Records in the backend's own space() are written and read
-  // there directly (a GPU rank's device-resident halo); others pass through one copy.
+  // there directly (a GPU rank's device-resident halo); others pass through one copy. The
+  // vertices sent are those other ranks hold: only they can get contact force shares.
   virtual void set_halo(const std::vector<std::int64_t>& send_index, std::int64_t recv_base,
                         std::int64_t n_recv) = 0;
   virtual void pack_halo(double* out, Space where) = 0;

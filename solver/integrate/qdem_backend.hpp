@@ -209,7 +209,7 @@ class QdemBackend final : public Backend {
     if (contact_) contact_->evaluate(x_.cview(), v_.cview(), dt_diss);
   }
   std::vector<ContactShare> contact_shares() override {
-    return contact_ ? contact_->shares() : std::vector<ContactShare>{};
+    return contact_ ? contact_->shares(f_.view()) : std::vector<ContactShare>{};
   }
   void add_contact_forces(const std::vector<ContactShare>& in) override {
     if (contact_) contact_->add_forces(f_.view(), in);
@@ -508,6 +508,7 @@ class QdemBackend final : public Backend {
     halo_send_.assign(send_index);
     halo_base_ = recv_base;
     halo_nrecv_ = n_recv;
+    if (contact_) contact_->set_share_targets(send_index);  // only vertices others hold
   }
 
   // Records of 6 doubles: x then v of one vertex, packed where the state lives: straight

@@ -203,7 +203,6 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       auto s = tm.scope("elements");
       local_->element_forces(L_.n_interior, static_cast<std::int64_t>(L_.tets.size()), dt_diss,
                              false);
-      local_->sync();  // the tets' device time counts here, not in the contact stage's phases
       local_->assemble_forces(dt_diss, alpha);
     }
     // The contact stage sums each vertex's own entries while the shares are read and exchanged
@@ -847,10 +846,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
 
   // Packs the ghosts' x, v and starts their exchange, and queues the interior tets (their
   // vertices are all owned): on a GPU they run while the records are copied (on the copy
-  // stream) and unpacked; their time counts in "elements" at the synchronisation after the
-  // halo. Records staged through the host are posted before the interior tets, so that the
-  // messages travel meanwhile; device-resident ones after, begin_packed waiting for the pack
-  // only (mark_packed).
+  // stream) and unpacked; with the boundary tets queued after the halo, their device time
+  // counts in the contact stage's first synchronised phase (contact.broad), as on one process.
+  // Records staged through the host are posted before the interior tets, so that the messages
+  // travel meanwhile; device-resident ones after, begin_packed waiting for the pack only
+  // (mark_packed).
   void start_halo(PhaseTimers& tm, double dt_diss) {
     CommEngine& e = halo_->engine();
     const bool device = e.packed_space() == Space::Cuda;

@@ -119,6 +119,17 @@ void two_parts_give_the_whole_models_forces(const std::string& backend) {
     EXPECT_EQ(lm.model.contact.max_penetration, 0.05);  // the scene's contact settings carry over
     auto& be = backends.emplace_back(make_backend(backend));
     be->upload(lm.model);
+    // The owned vertices the other part holds, as the halo sends them: only they get shares,
+    // every other vertex's contact sum goes straight into f.
+    const LocalLayout other = layout_of(g, ix, 1 - side, 0.3);
+    const std::set<std::int64_t> held(other.vertices.begin() + other.n_owned,
+                                      other.vertices.begin() + other.n_free);
+    std::vector<std::int64_t> send;
+    for (std::int64_t i = 0; i < L.n_owned; ++i)
+      if (held.count(L.vertices[i])) send.push_back(i);
+    EXPECT_GT(send.size(), 0u);
+    EXPECT_LT(send.size(), static_cast<std::size_t>(L.n_owned));
+    be->set_halo(send, L.n_owned, 0);
     be->element_forces(0, lm.model.n_free_tets, 1e-4, false);
     be->assemble_forces(1e-4, g.mass_damping);
     for (const ContactShare& c : be->contact_shares())
