@@ -291,9 +291,6 @@ TEST(LocalModel, CornerListsAreInTheOneRankOrder) {
   }
 }
 
-// A distributed rank queues its interior tets before the ranks agree that the layout stays;
-// a rebuild discards that evaluation and undo_dissipation() takes its dissipated energy back,
-// bit for bit (the tets then run again on the new layout).
 // The anchor of a record (the rank owning it evaluates it): a point-face or wall record's free
 // side-1 vertex, else the free vertex of smallest global id, or none.
 TEST(LocalModel, AnchorSlotKnownAnswers) {
@@ -352,6 +349,9 @@ TEST(LocalModel, EdgeKeysTellTheEdgePairsAnchorOwner) {
   }
 }
 
+// A distributed rank queues its interior tets before the ranks agree that the layout stays;
+// a rebuild discards that evaluation and undo_dissipation() takes its dissipated energy back,
+// bit for bit (the tets then run again on the new layout).
 TEST(LocalModel, UndoableElementForcesRestoreTheDissipatedEnergy) {
   auto pb = make_problem(kScene);
   const Model& g = pb.model;
