@@ -66,6 +66,18 @@ def test_strong_efficiency():
     assert rows[1]["E1"] == pytest.approx(8.0 / (4 * 2.5)) and rows[1]["speedup"] == pytest.approx(3.2)
 
 
+def test_a_series_without_1_or_8_ranks_is_plotted_against_its_fewest():
+    pytest.importorskip("matplotlib")
+
+    def run_of(n, step):
+        return {**rec(n, step, "strong"), "status": "ok", "sweep": "slide-balance", "backend": "cuda",
+                "variant": "static", "date": "2026-01-01", "machine": {"revision": "a"},
+                "phases_per_step": {"contact": step}}
+
+    figs, md = report.plots([run_of(2, 2.0), run_of(4, 1.25)])
+    assert figs and any("| 4 |" in line for line in md)
+
+
 def test_fluid_halo_bytes_reach_the_table_rows():
     rows = report.efficiencies([{**rec(2, 1.0), "fluid_halo_bytes_per_step": 2.5e6}, rec(4, 1.1)], "weak")
     assert rows[0]["fluid_halo_bytes_per_step"] == 2.5e6 and rows[1]["fluid_halo_bytes_per_step"] is None
