@@ -429,45 +429,24 @@ class ContactStage {
 
   // The last evaluation's force shares of free vertices held but not owned (an MPI rank's
   // ghosts; none on one process), keys and vertices in this model's ids, in no fixed order.
-  // Meanwhile each vertex's own entries are sorted and summed (gather_local): on a GPU that runs
-  // while the host reads the shares and the ranks exchange them. A vertex no other rank holds
-  // gets its sum in f now; add_forces merges the others' with what arrives.
+  // The force law compacted them and queued their count's copy (queue_shares). Meanwhile each
+  // vertex's own entries are sorted and summed (gather_local): on a GPU that runs while the host
+  // reads the shares and the ranks exchange them. A vertex no other rank holds gets its sum in
+  // f now; add_forces merges the others' with what arrives.
   std::vector<ContactShare> shares(Vec3View f) {
     if (!ghosts_) return {};
-    const std::int64_t ne = 4 * n_prev_;
-    const auto evc = ent_v_.cview();
-    const auto efc = ent_f_.cview();
-    const auto k1 = pk1_.cview(), k2 = pk2_.cview();
-    const Evaluator ev = evaluator();
-    const auto compact = [&] {
-      count_.zero();
-      ContactShare* out = out_.view().p;
-      int* count = count_.view().p;
-      const std::int64_t cap = out_.size();
-      for_each(
-          Exec{}, ne, QDEMSPH_LAMBDA(std::int64_t e) {
-            const int i = evc[e];
-            if (i < ev.nfv || !ev.free(i)) return;
-            const int k = atomic_inc(count);
-            if (k >= cap) return;
-            ContactShare s;
-            s.k1 = k1[e / 4];
-            s.k2 = k2[e / 4];
-            s.vertex = i;
-            s.slot = static_cast<std::int32_t>(e % 4);
-            s.f = efc[e];
-            out[k] = s;
-          });
-    };
-    compact();
-    if constexpr (S == Space::Cuda) shares_mark_.record();
     gather_local(f);
     int count = 0;
-    read_marked(&count, count_.cview().p, sizeof(int));
-    std::int64_t n = count;
+    if constexpr (S == Space::Cuda) {
+      shares_mark_.wait();
+      std::memcpy(&count, share_count_.data(), sizeof(int));
+    } else {
+      count = count_.cview()[0];
+    }
+    const std::int64_t n = count;
     if (n > out_.size()) {  // as narrow_phase: again with room for all (the count is exact)
       out_.resize(n + n / 4 + 64);
-      compact();
+      compact_shares(4 * n_prev_, pk1_.cview(), pk2_.cview());
       if constexpr (S == Space::Cuda) shares_mark_.record();
     }
     std::vector<ContactShare> h(n);
@@ -980,6 +959,7 @@ class ContactStage {
             ef.set(4 * c + k, (k < r.n1 ? r.w[k] : -r.w[k]) * cf.f);
           }
         });
+    if (ghosts_) queue_shares(nc);
     // Dissipation of this step: per contact, plus for each of the previous step's touches with
     // no active successor (binary search in this step's sorted keys) its spring energy and the
     // second half of its last h's work, -h/2 . v_rel dt at this step's velocities.
@@ -1104,6 +1084,45 @@ class ContactStage {
     local_sorted_ = true;
   }
 
+  // The entries [0, ne) of free vertices held but not owned, as shares (keys k1, k2 of record
+  // e / 4), into out_; their count into count_, exact even when out_ is too small.
+  void compact_shares(std::int64_t ne, View<const std::uint64_t> k1, View<const std::uint64_t> k2) {
+    count_.zero();
+    const auto evc = ent_v_.cview();
+    const auto efc = ent_f_.cview();
+    const Evaluator ev = evaluator();
+    ContactShare* out = out_.view().p;
+    int* count = count_.view().p;
+    const std::int64_t cap = out_.size();
+    for_each(
+        Exec{}, ne, QDEMSPH_LAMBDA(std::int64_t e) {
+          const int i = evc[e];
+          if (i < ev.nfv || !ev.free(i)) return;
+          const int k = atomic_inc(count);
+          if (k >= cap) return;
+          ContactShare s;
+          s.k1 = k1[e / 4];
+          s.k2 = k2[e / 4];
+          s.vertex = i;
+          s.slot = static_cast<std::int32_t>(e % 4);
+          s.f = efc[e];
+          out[k] = s;
+        });
+  }
+
+  // The force law's shares (nc records, keys nk1_, nk2_) compacted and, on a GPU, their count
+  // copied to page-locked memory in the same queue: the dissipation's read-back, which follows,
+  // waits for it, so shares() need not (cube block, 2 H100s: the step's last device-idle
+  // stretch before the exchange was the compaction and a read-back).
+  void queue_shares(std::int64_t nc) {
+    compact_shares(4 * nc, nk1_.cview(), nk2_.cview());
+    if constexpr (S == Space::Cuda) {
+      share_count_.resize(sizeof(int));
+      cuda_copy_to_host_queued(share_count_.data(), count_.cview().p, sizeof(int));
+      shares_mark_.record();
+    }
+  }
+
   // f[i] += the contact force on each share target: gather_local's sum, or, for a vertex that
   // other ranks sent shares for, its entries and those shares merged in key order and summed
   // (the one-rank order). The shares are sorted by vertex, then key, on the host (they are few).
@@ -1214,6 +1233,7 @@ class ContactStage {
   std::vector<std::uint8_t> share_host_;  // share_flag_ on the host (merge_shares checks)
   bool local_sorted_ = false;             // gather_local ran for the last evaluation
   DeviceMark shares_mark_;                // after the shares' compaction (shares, read_marked)
+  StagingBytes share_count_;              // their count, copied with them (queue_shares)
   Buffer<int> keep_{S};
   bool timed_ = false;  // the last evaluation was a dynamic step
   Buffer<int> ent_v_{S}, vcnt_{S}, vcur_{S}, vent_{S}, count_{S};

@@ -240,6 +240,11 @@ void cuda_copy_wait() {
   QDEMSPH_CUDA_CHECK(cudaStreamSynchronize(copy_stream()), "cudaStreamSynchronize");
 }
 
+void cuda_copy_to_host_queued(void* dst, const void* src, std::size_t bytes) {
+  QDEMSPH_CUDA_CHECK(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDeviceToHost),
+                     "cudaMemcpyAsync (queued)");
+}
+
 DeviceMark::~DeviceMark() {
   if (event_) cudaEventDestroy(static_cast<cudaEvent_t>(event_));
 }
