@@ -37,17 +37,36 @@ QDEMSPH_HD std::uint64_t contact_key1(int type, std::uint64_t id1) {
   return (static_cast<std::uint64_t>(type) << 60) | id1;
 }
 
+// A body's place in the order of edge-pair anchors (22 bits of a hash of its id): an edge
+// pair of two bodies is anchored on the edge of the body that comes first, so the edge pairs
+// across a border split between its ranks body pair by body pair, each GPU thread's pair of
+// primitives wholly on one side (the smallest global id alone gave all of them to one rank).
+QDEMSPH_HD std::uint64_t body_priority(std::int64_t body) {
+  std::uint64_t z = static_cast<std::uint64_t>(body) + 0x9E3779B97F4A7C15ull;  // splitmix64
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return (z ^ (z >> 31)) >> 42;
+}
+
 // The slot of the record's anchor vertex: in a distributed run the rank owning it evaluates
 // the record (once over the ranks) and keeps its history. A point-face or wall record's side-1
 // vertex when it is free (the duplicate filter compares one vertex's point-face hits on one
-// body, so they stay together), else the free vertex with the smallest global id; -1 when
-// no vertex is free. v: the record's vertex ids (-1: unused); vs.free(id), vs.gid(id).
+// body, so they stay together); else the free vertex with the smallest global id, for an edge
+// pair among those of the body first by body_priority; -1 when no vertex is free. v: the
+// record's vertex ids (-1: unused); vs.free(id), vs.gid(id), vs.body(id).
 template <class Id, class Vertices>
 QDEMSPH_HD int anchor_slot(int type, const Id* v, const Vertices& vs) {
   if (type != kEdgeEdge && v[0] >= 0 && vs.free(v[0])) return 0;
   int best = -1;
-  for (int k = 0; k < 4; ++k)
-    if (v[k] >= 0 && vs.free(v[k]) && (best < 0 || vs.gid(v[k]) < vs.gid(v[best]))) best = k;
+  std::uint64_t best_p = 0;
+  for (int k = 0; k < 4; ++k) {
+    if (v[k] < 0 || !vs.free(v[k])) continue;
+    const std::uint64_t p = type == kEdgeEdge ? body_priority(vs.body(v[k])) : 0;
+    if (best < 0 || p < best_p || (p == best_p && vs.gid(v[k]) < vs.gid(v[best]))) {
+      best = k;
+      best_p = p;
+    }
+  }
   return best;
 }
 

@@ -73,10 +73,12 @@ namespace qdemsph {
 // no load of its body (a ghost vertex's test in the narrow phase waited for two dependent loads).
 struct Evaluator {
   View<const std::uint64_t> vgid;
+  View<const std::int32_t> vbody;
   std::int64_t nfv = 0, nfree = 0;  // owned free vertices; all free vertices held
   bool all = true;                  // one process (no ghosts): every record, no test needed
   QDEMSPH_HD bool free(int i) const { return i < nfree; }
   QDEMSPH_HD std::uint64_t gid(int i) const { return vgid[i]; }
+  QDEMSPH_HD std::int32_t body(int i) const { return vbody[i]; }
   // A free vertex another rank owns.
   QDEMSPH_HD bool ghost(int i) const { return !all && i >= nfv && free(i); }
   QDEMSPH_HD bool owns(int type, const std::int32_t* v) const {
@@ -111,9 +113,10 @@ struct ContactTopology {
   double d_dem = 0;
   bool self_contact = false;
   Evaluator eval;  // feature pairs another rank evaluates are skipped
-  // On an MPI rank, per edge: 2 gid + 1 of its free end with the smallest global id when this
-  // rank owns that end, 2 gid when another rank does, kNoFreeEnd when neither end is free (one
-  // process: empty). The smaller key of two edges is their record's anchor (anchor_slot).
+  // On an MPI rank, per edge: body_priority of its body << 41 | 2 gid + 1 of its free end with
+  // the smallest global id when this rank owns that end, 2 gid when another rank does;
+  // kNoFreeEnd when neither end is free (one process: empty). The smaller key of two edges is
+  // their record's anchor (anchor_slot).
   View<const std::uint64_t> edge_anchor;
   static constexpr std::uint64_t kNoFreeEnd = ~std::uint64_t{1};
 
@@ -291,10 +294,10 @@ class ContactStage {
     write_on_host(edge_anchor_, ne, stage_, [&](std::uint64_t* key) {
       for_each(HostExec{}, ne, [&](std::int64_t e) {
         std::uint64_t k = ContactTopology::kNoFreeEnd;
-        for (const std::int32_t i : edges[e]) {
+        for (const std::int32_t i : edges[e]) {  // both ends are of one body
           if (i >= nfree) continue;
-          const std::uint64_t g = ids ? m.gid[i] : static_cast<std::uint64_t>(i);
-          k = std::min(k, 2 * g + (i < nfv ? 1 : 0));
+          const std::uint64_t g = ids ? m.gid[i] : static_cast<std::uint64_t>(i);  // < 2^31
+          k = std::min(k, body_priority(m.body[i]) << 41 | (2 * g + (i < nfv ? 1 : 0)));
         }
         key[e] = k;
       });
@@ -577,7 +580,9 @@ class ContactStage {
     return reduce_sum(
         Exec{}, n_prev_, QDEMSPH_LAMBDA(std::int64_t c) { return en[c]; });
   }
-  Evaluator evaluator() const { return {vgid_.cview(), nfv_, nfree_, !ghosts_}; }
+  Evaluator evaluator() const {
+    return {vgid_.cview(), vertex_body_.cview(), nfv_, nfree_, !ghosts_};
+  }
   // Energy dissipated by the contact dashpots and Coulomb slip since the start [J].
   double dissipated_energy() const { return dissipated_; }
   const ContactStepStats& stats() const { return stats_; }

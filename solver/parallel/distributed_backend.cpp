@@ -76,11 +76,14 @@ CommField cfield(const std::vector<T>& v) {
   return comm_field(const_cast<T*>(v.data()), static_cast<std::int64_t>(v.size()));
 }
 
-// Free and global ids of the global model's vertices for anchor_slot (fixed: no owner).
+// Free and global ids and bodies of the global model's vertices for anchor_slot (fixed: no
+// owner).
 struct GlobalVertices {
   const std::vector<std::int32_t>& owner;
+  const std::vector<std::int32_t>& vertex_body;
   bool free(std::int64_t i) const { return owner[i] >= 0; }
   std::int64_t gid(std::int64_t i) const { return i; }
+  std::int32_t body(std::int64_t i) const { return vertex_body[i]; }
 };
 
 struct VertexRecord {
@@ -1105,8 +1108,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     std::vector<int> hdest(nsh);
     std::atomic<bool> unanchored{false};
     for_each(HostExec{}, nsh, [&](std::int64_t k) {
-      const int a =
-          anchor_slot(static_cast<int>(sh.k1[k] >> 60), sh.v[k].data(), GlobalVertices{owner_});
+      const int a = anchor_slot(static_cast<int>(sh.k1[k] >> 60), sh.v[k].data(),
+                                GlobalVertices{owner_, g_->body});
       if (a < 0) unanchored.store(true, std::memory_order_relaxed);
       hdest[k] = a < 0 ? me_ : owner_[sh.v[k][a]];
     });

@@ -292,11 +292,13 @@ TEST(LocalModel, CornerListsAreInTheOneRankOrder) {
 }
 
 // The anchor of a record (the rank owning it evaluates it): a point-face or wall record's free
-// side-1 vertex, else the free vertex of smallest global id, or none.
+// side-1 vertex, else the free vertex of smallest global id (for an edge pair, of the body
+// first by body_priority), or none.
 TEST(LocalModel, AnchorSlotKnownAnswers) {
-  struct Ids {  // gid = index; ids >= 1000000 are a fixed body's
+  struct Ids {  // gid = index; ids >= 1000000 are a fixed body's; body = id / 100
     bool free(std::int64_t i) const { return i < 1000000; }
     std::uint64_t gid(std::int64_t i) const { return static_cast<std::uint64_t>(i); }
+    std::int64_t body(std::int64_t i) const { return i / 100; }
   } ids;
   const std::int64_t pf[4] = {7, 3, 2, 1}, wall[4] = {7, -1, -1, -1};
   EXPECT_EQ(anchor_slot(kPointFace, pf, ids), 0);
@@ -309,17 +311,48 @@ TEST(LocalModel, AnchorSlotKnownAnswers) {
   EXPECT_EQ(anchor_slot(kEdgeEdge, fixed_edge, ids), 3);
   const std::int64_t none[4] = {1000001, 1000002, -1, -1};
   EXPECT_EQ(anchor_slot(kEdgeEdge, none, ids), -1);
+  // Two free bodies' edges: the smaller id of the edge of the body first by body_priority,
+  // whichever edge comes first in the record; over 200 body pairs each side anchors about half.
+  int lower = 0;
+  for (std::int64_t b = 0; b < 200; ++b) {
+    const std::int64_t e[4] = {100 * b + 5, 100 * b + 9, 100 * b + 107, 100 * b + 103};
+    const std::int64_t swapped[4] = {e[2], e[3], e[0], e[1]};
+    const int k = anchor_slot(kEdgeEdge, e, ids);
+    EXPECT_EQ(k, body_priority(b + 1) < body_priority(b) ? 3 : 0)
+        << "bodies " << b << ", " << b + 1;
+    EXPECT_EQ(swapped[anchor_slot(kEdgeEdge, swapped, ids)], e[k]);
+    lower += k == 0;
+  }
+  EXPECT_GT(lower, 70);
+  EXPECT_LT(lower, 130);
 }
+
+// Two free boxes side by side along x (0.1 m cells), the cut through the second.
+const char* kTwoBodies = R"(
+run: {mode: dynamic, end_time: 1.0}
+materials: {m: {law: svk, E: 1.0e6, nu: 0.3, density: 1000}}
+contact: {d_dem: 0.01}
+bodies:
+  - {name: a, material: m, mesh: {type: box, size: [0.3, 0.2, 0.2], cells: [3, 2, 2]}}
+  - {name: b, material: m, mesh: {type: box, origin: [0.305, 0, 0], size: [0.3, 0.2, 0.2],
+     cells: [3, 2, 2]}}
+)";
 
 // The narrow phase skips an edge pair another rank evaluates before loading its vertices, from
 // one key per edge (ContactTopology::evaluates_edges): the same answer as the record's anchor
-// (Evaluator::owns) for every pair of edges in each part, across the cut too.
-TEST(LocalModel, EdgeKeysTellTheEdgePairsAnchorOwner) {
-  auto pb = make_problem(kScene, "test.yaml", "cpu");
+// (Evaluator::owns) for every pair of edges in each part, across the cut too; for a body and
+// a fixed floor (kScene) and for two free bodies (kTwoBodies: body_priority).
+class EdgeKeys : public ::testing::TestWithParam<std::pair<const char*, double>> {};
+INSTANTIATE_TEST_SUITE_P(LocalModel, EdgeKeys,
+                         ::testing::Values(std::pair{kScene, 0.3}, std::pair{kTwoBodies, 0.35}));
+TEST_P(EdgeKeys, TellTheEdgePairsAnchorOwner) {
+  const auto [scene, cut] = GetParam();
+  auto pb = make_problem(scene, "test.yaml", "cpu");
   const Model& g = pb.model;
   const ModelIndex ix = index_model(g);
+  std::int64_t two_bodies = 0;  // crossing pairs of two free bodies' edges
   for (int side = 0; side < 2; ++side) {
-    const LocalLayout L = layout_of(g, ix, side, 0.3);
+    const LocalLayout L = layout_of(g, ix, side, cut);
     std::vector<Vec3> x, v;
     for (auto gv : L.vertices) {
       x.push_back(g.x[gv]);
@@ -342,11 +375,14 @@ TEST(LocalModel, EdgeKeysTellTheEdgePairsAnchorOwner) {
         int owned = 0;
         for (const std::int32_t i : ends) owned += i < lm.model.n_free_vertices;
         crossing += owned > 0 && owned < 4;
+        two_bodies += owned > 0 && owned < 4 && ends[0] < t.eval.nfree && ends[2] < t.eval.nfree &&
+                      lm.model.body[ends[0]] != lm.model.body[ends[2]];
       }
     EXPECT_EQ(mismatched, 0) << "side " << side;
     EXPECT_GT(here, 0) << "side " << side;
     EXPECT_GT(crossing, 0) << "side " << side;
   }
+  EXPECT_EQ(two_bodies > 0, std::string(scene) == kTwoBodies);
 }
 
 // A distributed rank queues its interior tets before the ranks agree that the layout stays;
