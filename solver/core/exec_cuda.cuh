@@ -148,9 +148,8 @@ void reduce_max_to(CudaExec, std::int64_t n, F f, double init, double* out) {
     *out = init;
     return;
   }
-  const double* r = cuda_detail::reduce_queue(n, f, cuda_detail::MaxOp{}, init);
-  QDEMSPH_CUDA_CHECK(cudaMemcpyAsync(out, r, sizeof(double), cudaMemcpyDeviceToHost),
-                     "reduction result copy");
+  cuda_copy_to_host_queued(out, cuda_detail::reduce_queue(n, f, cuda_detail::MaxOp{}, init),
+                           sizeof(double));
 }
 
 inline void exec_sync(CudaExec) {
