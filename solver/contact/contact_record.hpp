@@ -37,10 +37,11 @@ QDEMSPH_HD std::uint64_t contact_key1(int type, std::uint64_t id1) {
   return (static_cast<std::uint64_t>(type) << 60) | id1;
 }
 
-// A body's place in the order of edge-pair anchors (22 bits of a hash of its id): an edge
-// pair of two bodies is anchored on the edge of the body that comes first, so the edge pairs
-// across a border split between its ranks body pair by body pair, each GPU thread's pair of
-// primitives wholly on one side (the smallest global id alone gave all of them to one rank).
+// A body's place in the order of anchors (22 bits of a hash of its id): an edge pair of two
+// bodies is anchored on the edge of the body that comes first, so the edge pairs across a
+// border split between its ranks body pair by body pair, each GPU thread's pair of primitives
+// wholly on one side (the smallest global id alone gave all of them to one rank); so are the
+// point-face touches on that body's faces when it is whole (face_leads).
 QDEMSPH_HD std::uint64_t body_priority(std::int64_t body) {
   std::uint64_t z = static_cast<std::uint64_t>(body) + 0x9E3779B97F4A7C15ull;  // splitmix64
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
@@ -48,15 +49,32 @@ QDEMSPH_HD std::uint64_t body_priority(std::int64_t body) {
   return (z ^ (z >> 31)) >> 42;
 }
 
+// A distributed rank's view of a body (ContactModel::body_whole): whether one rank owns all of
+// its free vertices, this one or another; a fixed body, or a free one the cut divides, is split.
+enum BodyWhole : std::uint8_t { kSplit = 0, kWholeHere = 1, kWholeElsewhere = 2 };
+
+// Whether the faces of body `face` take the point-face touches of body `point`'s vertices: the
+// face's body is whole and comes first by body_priority (as its edges anchor the pair's edge
+// pairs). Then one rank evaluates every record of the two bodies, so a pair of primitives
+// across a border is tested there only (the other rank drops it from its candidates); the
+// duplicate filter still sees all of a vertex's hits on one body on one rank. vs.whole(body).
+template <class Vertices>
+QDEMSPH_HD bool face_leads(const Vertices& vs, std::int64_t point, std::int64_t face) {
+  return point != face && vs.whole(face) && body_priority(face) < body_priority(point);
+}
+
 // The slot of the record's anchor vertex: in a distributed run the rank owning it evaluates
-// the record (once over the ranks) and keeps its history. A point-face or wall record's side-1
-// vertex when it is free (the duplicate filter compares one vertex's point-face hits on one
-// body, so they stay together); else the free vertex with the smallest global id, for an edge
-// pair among those of the body first by body_priority; -1 when no vertex is free. v: the
-// record's vertex ids (-1: unused); vs.free(id), vs.gid(id), vs.body(id).
+// the record (once over the ranks) and keeps its history. A point-face record's face vertex
+// when the face's body leads (face_leads), else its side-1 vertex when it is free, as a wall
+// record's (the duplicate filter compares one vertex's point-face hits on one body, so they
+// stay together); else the free vertex with the smallest global id, for an edge pair among
+// those of the body first by body_priority; -1 when no vertex is free. v: the record's vertex
+// ids (-1: unused); vs.free(id), vs.gid(id), vs.body(id), vs.whole(body).
 template <class Id, class Vertices>
 QDEMSPH_HD int anchor_slot(int type, const Id* v, const Vertices& vs) {
-  if (type != kEdgeEdge && v[0] >= 0 && vs.free(v[0])) return 0;
+  if (type != kEdgeEdge && v[0] >= 0 && vs.free(v[0]))
+    return type == kPointFace && vs.free(v[1]) && face_leads(vs, vs.body(v[0]), vs.body(v[1])) ? 1
+                                                                                               : 0;
   int best = -1;
   std::uint64_t best_p = 0;
   for (int k = 0; k < 4; ++k) {

@@ -22,7 +22,8 @@
 //     a thin body is not a penetration); a per-vertex gather (add_forces: count, scan, fill,
 //     segment sort by record key, then slot) adds it to f in a fixed order (deterministic);
 //     on an MPI rank, which evaluates only the records anchored at its owned vertices
-//     (Evaluator), the shares of other ranks' vertices leave by shares() (which sums each
+//     (Evaluator; all those of two bodies when one is whole there and leads, face_leads),
+//     the shares of other ranks' vertices leave by shares() (which sums each
 //     vertex's own entries meanwhile) and arrive at their owners' add_forces, which merges
 //     them with the vertex's own entries by key: the one-rank order;
 //  4. energy: the springs' stored energy and the step's dissipation per contact
@@ -74,13 +75,19 @@ namespace qdemsph {
 struct Evaluator {
   View<const std::uint64_t> vgid;
   View<const std::int32_t> vbody;
+  View<const std::uint8_t> bwhole;  // per body, BodyWhole (with ghosts only)
   std::int64_t nfv = 0, nfree = 0;  // owned free vertices; all free vertices held
   bool all = true;                  // one process (no ghosts): every record, no test needed
   QDEMSPH_HD bool free(int i) const { return i < nfree; }
   QDEMSPH_HD std::uint64_t gid(int i) const { return vgid[i]; }
   QDEMSPH_HD std::int32_t body(int i) const { return vbody[i]; }
+  QDEMSPH_HD bool whole(std::int64_t b) const { return bwhole[b] != kSplit; }
   // A free vertex another rank owns.
   QDEMSPH_HD bool ghost(int i) const { return !all && i >= nfv && free(i); }
+  // Of two distinct bodies, the one whose faces lead (face_leads), -1 when neither does.
+  QDEMSPH_HD int leading_body(int a, int b) const {
+    return face_leads(*this, a, b) ? b : (face_leads(*this, b, a) ? a : -1);
+  }
   QDEMSPH_HD bool owns(int type, const std::int32_t* v) const {
     if (all) return true;
     // Owned vertices (index < nfv) are free: when every vertex is owned so is the anchor, when
@@ -143,9 +150,10 @@ struct ContactTopology {
   // accepted gaps by more than round-off, and two edges whose midpoints are farther apart
   // than their half-lengths plus D_DEM (a valid edge-edge touch has |d| = |p - q| < D_DEM).
   // The exact tests decide every other case, so the records are those of testing everything.
-  // On an MPI rank, a free vertex's point-face tests run on its owner only and an edge pair's
-  // on its anchor's owner (anchor_slot); a fixed vertex's run wherever both sides are held
-  // (the duplicate filter needs all of them), the narrow phase keeps the anchor owner's record.
+  // On an MPI rank, a free vertex's point-face tests run on its owner only, unless the faces'
+  // body leads (face_leads: then on that body's rank), and an edge pair's on its anchor's owner
+  // (anchor_slot); a fixed vertex's run wherever both sides are held (the duplicate filter
+  // needs all of them), the narrow phase keeps the anchor owner's record.
   template <class Emit>
   QDEMSPH_HD void narrow_tris(Vec3CView x, std::int64_t a, std::int64_t b, Emit&& emit) const {
     const int ba = tri_body[a], bb = tri_body[b];
@@ -162,15 +170,20 @@ struct ContactTopology {
     }
     const bool test_anchor = !eval.all && !all_owned;
     const double tol = 1e-9 * pen;  // >> the round-off of a plane distance, << any gap
+    // A body whose faces lead (face_leads) has every point-face test of the pair on its rank;
+    // else a free vertex's touches are tested on its owner.
+    const int lead = test_anchor && !same ? eval.leading_body(ba, bb) : -1;
     // Point-face both ways.
     for (int side = 0; side < 2; ++side) {
       const std::int64_t s1 = side == 0 ? a : b, s2 = side == 0 ? b : a;
+      const bool led = lead >= 0 && lead == (side == 0 ? bb : ba);
+      if (led && eval.bwhole[lead] != kWholeHere) continue;
       const Vec3* p2 = side == 0 ? pb : pa;
       const Vec3 n2 = tri_n[s2];
       for (std::int64_t q = own_v_off[s1]; q < own_v_off[s1 + 1]; ++q) {
         const int A = own_v[q];
         if (same && tri_has(s2, A)) continue;
-        if (eval.ghost(A)) continue;  // its owner tests a free vertex's touches
+        if (!led && eval.ghost(A)) continue;  // its owner tests a free vertex's touches
         const Vec3 xa = x[A];
         const double s_est = dot(xa - p2[0], n2);
         if (s_est > d_dem + tol || s_est < -pen - tol) continue;
@@ -376,6 +389,14 @@ class ContactStage {
                                " after a fixed body's vertex");
     ghosts_ = nfree_ > nfv_;     // free vertices other ranks own (a distributed run's rank)
     fixed_held_ = nfree_ < nv_;  // fixed bodies' vertices (their point-face hits: keep_evaluated)
+    const std::size_t nb = ghosts_ ? c.body_fixed.size() : 0;
+    if (!c.body_whole.empty() && c.body_whole.size() != c.body_fixed.size())
+      throw std::logic_error("contact stage: body_whole has " +
+                             std::to_string(c.body_whole.size()) + " entries for " +
+                             std::to_string(c.body_fixed.size()) + " bodies");
+    body_whole_.assign(c.body_whole.empty() ? std::vector<std::uint8_t>(nb, kSplit)
+                                            : std::vector<std::uint8_t>(c.body_whole.begin(),
+                                                                        c.body_whole.begin() + nb));
     upload_edge_anchors(m);
     std::vector<std::int64_t> every(ghosts_ ? nfv_ : 0);
     std::iota(every.begin(), every.end(), std::int64_t{0});
@@ -581,7 +602,7 @@ class ContactStage {
         Exec{}, n_prev_, QDEMSPH_LAMBDA(std::int64_t c) { return en[c]; });
   }
   Evaluator evaluator() const {
-    return {vgid_.cview(), vertex_body_.cview(), nfv_, nfree_, !ghosts_};
+    return {vgid_.cview(), vertex_body_.cview(), body_whole_.cview(), nfv_, nfree_, !ghosts_};
   }
   // Energy dissipated by the contact dashpots and Coulomb slip since the start [J].
   double dissipated_energy() const { return dissipated_; }
@@ -729,15 +750,19 @@ class ContactStage {
     const auto pvv = pv;
     const std::int64_t nfv = nfv_;
     const bool ghosts = ghosts_;
+    const Evaluator ev = evaluator();
     // Only primitives of free bodies start a pair (they come first): a fixed-fixed pair is
     // never needed, and a free-fixed pair (i < npf <= j) is found from its free side. On an
     // MPI rank a pair of two free primitives without an owned vertex is another rank's
-    // (every record it could give is anchored elsewhere, Evaluator).
+    // (every record it could give is anchored elsewhere, Evaluator), and so is a pair of two
+    // bodies of which one leads on another rank (face_leads: all their records are its).
     return pairs_.build(
         cells_, cc, rr, gap, npf_, QDEMSPH_LAMBDA(std::int64_t i, std::int64_t j)->bool {
           const int bi = pb[i], bj = pb[j];
           if (fixed[bi] && fixed[bj]) return false;
           if (ghosts && !fixed[bj]) {
+            const int lead = bi != bj ? ev.leading_body(bi, bj) : -1;
+            if (lead >= 0) return ev.bwhole[lead] == kWholeHere;
             bool owned = false;
             for (int a = 0; a < 8 && !owned; ++a) {
               const int va = pvv[(a & 3) * np + (a < 4 ? i : j)];
@@ -1223,6 +1248,7 @@ class ContactStage {
   Buffer<std::int32_t> edge_tri_{S};
   Buffer<std::int32_t> tri_v_{S}, edge_v_{S}, prim_v_{S}, tri_body_{S}, prim_body_{S}, own_v_{S},
       own_e_{S}, prim_tri_{S}, wall_v_{S}, body_fixed_{S}, body_mat_{S}, vertex_body_{S};
+  Buffer<std::uint8_t> body_whole_{S};  // ContactModel::body_whole (kSplit where it has none)
   Buffer<std::uint64_t> vgid_{S}, edge_anchor_{S};
   Buffer<std::int64_t> own_v_off_{S}, own_e_off_{S}, prim_tri_off_{S};
   Buffer<double> body_h_{S}, pair_mu_{S}, pair_zeta_{S}, pair_kn_{S}, pair_E_{S}, wall_{S},

@@ -64,6 +64,8 @@ struct ContactModel {
   std::vector<double> body_h;  // mean surface edge length [m]
   std::vector<std::uint8_t> body_fixed;
   std::vector<std::int32_t> body_mat;
+  // A distributed rank's part only (else empty): per body, BodyWhole (contact_record.hpp).
+  std::vector<std::uint8_t> body_whole;
   int n_mat = 0;
   std::vector<double> pair_mu, pair_zeta, pair_kn, pair_E;
 

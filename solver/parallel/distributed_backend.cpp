@@ -77,13 +77,15 @@ CommField cfield(const std::vector<T>& v) {
 }
 
 // Free and global ids and bodies of the global model's vertices for anchor_slot (fixed: no
-// owner).
+// owner), and which bodies one rank owns whole.
 struct GlobalVertices {
   const std::vector<std::int32_t>& owner;
   const std::vector<std::int32_t>& vertex_body;
+  const std::vector<std::int32_t>& body_rank;
   bool free(std::int64_t i) const { return owner[i] >= 0; }
   std::int64_t gid(std::int64_t i) const { return i; }
   std::int32_t body(std::int64_t i) const { return vertex_body[i]; }
+  bool whole(std::int64_t b) const { return body_rank[b] >= 0; }
 };
 
 struct VertexRecord {
@@ -987,6 +989,21 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     return {imb, n > 0 ? mx[0] / static_cast<double>(n) : 0.0, mx[1]};
   }
 
+  // body_rank_ from owner_: a body per thread at a time.
+  void update_body_ranks() {
+    const std::vector<BodyRange>& bodies = g_->bodies;
+    const auto nb = static_cast<std::int64_t>(bodies.size());
+    body_rank_.assign(nb, -1);
+    for_each(HostExec{}, nb, [&](std::int64_t b) {
+      const BodyRange& r = bodies[b];
+      if (r.fixed || r.v_end == r.v_begin) return;
+      const std::int32_t o = owner_[r.v_begin];
+      for (std::int64_t i = r.v_begin + 1; i < r.v_end; ++i)
+        if (owner_[i] != o) return;
+      body_rank_[b] = o;
+    });
+  }
+
   // Moves the state in `s` (any distribution over the ranks) to its owners and installs the
   // rank's new part. rebalance: a new partition from the measured costs first; otherwise the
   // owners are re-read from the current partition at the current positions. Unless `always`,
@@ -1019,6 +1036,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     });
     const auto all_changed = allgatherv(comm_, changed, &bytes);
     for (const auto& [gv, r] : all_changed) owner_[gv] = static_cast<std::int32_t>(r);
+    if (!all_changed.empty()) update_body_ranks();
     if (all_changed.empty() && !always) {
       migrated_bytes_ += bytes;
       return;
@@ -1109,7 +1127,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     std::atomic<bool> unanchored{false};
     for_each(HostExec{}, nsh, [&](std::int64_t k) {
       const int a = anchor_slot(static_cast<int>(sh.k1[k] >> 60), sh.v[k].data(),
-                                GlobalVertices{owner_, g_->body});
+                                GlobalVertices{owner_, g_->body, body_rank_});
       if (a < 0) unanchored.store(true, std::memory_order_relaxed);
       hdest[k] = a < 0 ? me_ : owner_[sh.v[k][a]];
     });
@@ -1190,6 +1208,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     L.tets = std::move(held.index);
     L.n_interior = held.start[kBoundary];
     L.n_home = held.start[kHalo];
+    L.body_whole.resize(body_rank_.size());
+    for (std::size_t b = 0; b < body_rank_.size(); ++b)
+      L.body_whole[b] = body_rank_[b] < 0      ? kSplit
+                        : body_rank_[b] == me_ ? kWholeHere
+                                               : kWholeElsewhere;
 
     // Contact band: the cells holding this rank's owned contact vertices, published to all;
     // each vertex's cell and the distinct cells in key order found on the threads (a key per
@@ -1443,6 +1466,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   const Model* g_ = nullptr;
   ModelIndex ix_;
   std::vector<std::int32_t> owner_;  // per global vertex: owner rank (-1: fixed body)
+  // Per body: the rank owning all its free vertices, -1 when the cut divides it or it is fixed
+  // (a whole body's faces may lead its contacts, contact_record.hpp face_leads).
+  std::vector<std::int32_t> body_rank_;
   Decomposition dec_;
   LocalLayout L_;
   FeatureIds ids_;

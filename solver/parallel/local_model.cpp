@@ -263,6 +263,7 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   c.body_h = gc.body_h;
   c.body_fixed = gc.body_fixed;
   c.body_mat = gc.body_mat;
+  c.body_whole = L.body_whole;
   c.n_mat = gc.n_mat;
   c.pair_mu = gc.pair_mu;
   c.pair_zeta = gc.pair_zeta;

@@ -52,6 +52,9 @@ struct LocalLayout {
   std::int64_t n_free = 0;   // owned + free ghosts; fixed-body vertices after
   std::vector<std::int64_t> tets;
   std::int64_t n_interior = 0, n_home = 0;
+  // Per body, BodyWhole: whether one rank owns all its free vertices, this one or another
+  // (ContactModel::body_whole; empty: every body split).
+  std::vector<std::uint8_t> body_whole;
 };
 
 // Local <-> global ids of the features contact keys use (contact_record.hpp: k1 = type << 60

@@ -42,14 +42,37 @@ bodies:
 loads: [{type: point, body: a, at: [0.6, 0.2, 0.2], force: [1, 2, 3]}]
 )";
 
-// The layout of "rank" `side` (0: x < cut, 1: x >= cut), as the distributed backend builds it.
-LocalLayout layout_of(const Model& g, const ModelIndex& ix, int side, double cut) {
+// Two free boxes side by side along x (0.1 m cells), cut through
+// the second (EdgeKeys) or in the gap (TwoParts).
+const char* kTwoBodies = R"(
+run: {mode: dynamic, end_time: 1.0}
+materials: {m: {law: svk, E: 1.0e6, nu: 0.3, density: 1000}}
+contact: {d_dem: 0.01}
+bodies:
+  - {name: a, material: m, mesh: {type: box, size: [0.3, 0.2, 0.2], cells: [3, 2, 2]}}
+  - {name: b, material: m, mesh: {type: box, origin: [0.305, 0, 0], size: [0.3, 0.2, 0.2],
+     cells: [3, 2, 2]}}
+)";
+
+// The layout of "rank" `side` (0: x < cut, 1: x >= cut), as the distributed backend builds it;
+// the other side's free vertices within `band` of an owned one are held too (the contact band).
+LocalLayout layout_of(const Model& g, const ModelIndex& ix, int side, double cut, double band = 0) {
   auto owner = [&](std::int64_t v) { return g.X[v].x < cut ? 0 : 1; };
   LocalLayout L;
   for (std::int64_t v = 0; v < g.n_free_vertices; ++v)
     if (owner(v) == side) L.vertices.push_back(v);
   L.n_owned = static_cast<std::int64_t>(L.vertices.size());
   std::set<std::int64_t> held, ghosts;
+  for (std::int64_t u = 0; u < g.n_free_vertices; ++u)
+    for (std::int64_t i = 0; i < L.n_owned && owner(u) != side; ++i)
+      if (norm(g.X[u] - g.X[L.vertices[i]]) < band) ghosts.insert(u);
+  for (const BodyRange& b : g.bodies) {
+    int sides = 0;
+    for (std::int64_t v = b.v_begin; v < b.v_end; ++v) sides |= 1 << owner(v);
+    L.body_whole.push_back(b.fixed || sides == 3 ? kSplit
+                           : sides == 1 << side  ? kWholeHere
+                                                 : kWholeElsewhere);
+  }
   for (std::int64_t i = 0; i < L.n_owned; ++i)
     for (auto q = ix.corner_off[4 * L.vertices[i]]; q < ix.corner_off[4 * L.vertices[i] + 4]; ++q)
       held.insert(ix.corner_tet[q]);
@@ -77,9 +100,12 @@ LocalLayout layout_of(const Model& g, const ModelIndex& ix, int side, double cut
   return L;
 }
 
-// The parts on `backend` against the whole model on the same backend.
-void two_parts_give_the_whole_models_forces(const std::string& backend) {
-  auto pb = make_problem(kScene, "test.yaml", backend);
+// The parts on `backend` against the whole model on the same backend: the body on the fixed
+// floor cut through (kScene, 0.3), or two free bodies cut in the gap between them (kTwoBodies,
+// 0.3025), whose every record the body that leads (face_leads, here b) evaluates.
+void two_parts_give_the_whole_models_forces(const std::string& backend, const char* scene,
+                                            double cut) {
+  auto pb = make_problem(scene, "test.yaml", backend);
   const Model& g = pb.model;
   ASSERT_TRUE(g.contact.enabled);
   const ModelIndex ix = index_model(g);
@@ -105,9 +131,10 @@ void two_parts_give_the_whole_models_forces(const std::string& backend) {
   std::vector<LocalModel> parts;
   std::vector<std::unique_ptr<Backend>> backends;
   std::vector<ContactShare> crossing[2];
-  std::int64_t records = 0;
+  std::int64_t records = 0, led = 0;  // led: point-face records of another part's vertex
+  const double band = 0.25;
   for (int side = 0; side < 2; ++side) {
-    const LocalLayout& L = layouts.emplace_back(layout_of(g, ix, side, 0.3));
+    const LocalLayout& L = layouts.emplace_back(layout_of(g, ix, side, cut, band));
     std::vector<Vec3> x, v;
     for (auto gv : L.vertices) {
       x.push_back(moved.x[gv]);
@@ -116,12 +143,12 @@ void two_parts_give_the_whole_models_forces(const std::string& backend) {
     const LocalModel& lm = parts.emplace_back(build_local_model(g, ix, L, x, v));
     EXPECT_EQ(lm.model.n_free_vertices, L.n_owned);
     EXPECT_EQ(lm.model.n_counted_tets, L.n_home);
-    EXPECT_EQ(lm.model.contact.max_penetration, 0.05);  // the scene's contact settings carry over
+    EXPECT_EQ(lm.model.contact.max_penetration, g.contact.max_penetration);  // settings carry over
     auto& be = backends.emplace_back(make_backend(backend));
     be->upload(lm.model);
     // The owned vertices the other part holds, as the halo sends them: only they get shares,
     // every other vertex's contact sum goes straight into f.
-    const LocalLayout other = layout_of(g, ix, 1 - side, 0.3);
+    const LocalLayout other = layout_of(g, ix, 1 - side, cut, band);
     const std::set<std::int64_t> held(other.vertices.begin() + other.n_owned,
                                       other.vertices.begin() + other.n_free);
     std::vector<std::int64_t> send;
@@ -135,7 +162,12 @@ void two_parts_give_the_whole_models_forces(const std::string& backend) {
     for (const ContactShare& c : be->contact_shares())
       crossing[1 - side].push_back(lm.ids.to_global(c));
     records += static_cast<std::int64_t>(be->contact_stats().at("contacts"));
+    const BackendState st = be->save_state();
+    for (std::size_t e = 0; e < st.contact->size(); ++e)
+      led += (st.contact->k1[e] >> 60) == kPointFace && st.contact->v[e][0] >= L.n_owned &&
+             st.contact->v[e][0] < L.n_free;
   }
+  EXPECT_EQ(led > 0, std::string(scene) == kTwoBodies);
   EXPECT_GT(crossing[0].size() + crossing[1].size(), 0u);
   EXPECT_EQ(records, static_cast<std::int64_t>(whole_state.contact->size()));  // each once
 
@@ -194,15 +226,18 @@ void two_parts_give_the_whole_models_forces(const std::string& backend) {
   EXPECT_NEAR(sum.dissipated, whole_e.dissipated, 1e-12 * std::abs(whole_e.dissipated));
 }
 
-TEST(LocalModel, TwoPartsGiveTheWholeModelsForcesBitForBit) {
-  two_parts_give_the_whole_models_forces("cpu");
+class TwoParts : public ::testing::TestWithParam<std::pair<const char*, double>> {};
+INSTANTIATE_TEST_SUITE_P(LocalModel, TwoParts,
+                         ::testing::Values(std::pair{kScene, 0.3}, std::pair{kTwoBodies, 0.3025}));
+TEST_P(TwoParts, GiveTheWholeModelsForcesBitForBit) {
+  two_parts_give_the_whole_models_forces("cpu", GetParam().first, GetParam().second);
 }
 
 // On a GPU the shares are read on the copy stream while the parts' own entries are summed
 // (ContactStage::shares), then merged in key order.
-TEST(LocalModel, TwoPartsOnTheGpuGiveTheWholeModelsForcesBitForBit) {
+TEST_P(TwoParts, OnTheGpuGiveTheWholeModelsForcesBitForBit) {
   if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
-  two_parts_give_the_whole_models_forces("cuda");
+  two_parts_give_the_whole_models_forces("cuda", GetParam().first, GetParam().second);
 }
 
 // A rebuild into an earlier part's LocalModel (the distributed backend keeps one, so that its
@@ -299,6 +334,7 @@ TEST(LocalModel, AnchorSlotKnownAnswers) {
     bool free(std::int64_t i) const { return i < 1000000; }
     std::uint64_t gid(std::int64_t i) const { return static_cast<std::uint64_t>(i); }
     std::int64_t body(std::int64_t i) const { return i / 100; }
+    bool whole(std::int64_t b) const { return b % 2 == 0; }
   } ids;
   const std::int64_t pf[4] = {7, 3, 2, 1}, wall[4] = {7, -1, -1, -1};
   EXPECT_EQ(anchor_slot(kPointFace, pf, ids), 0);
@@ -325,18 +361,18 @@ TEST(LocalModel, AnchorSlotKnownAnswers) {
   }
   EXPECT_GT(lower, 70);
   EXPECT_LT(lower, 130);
+  // A vertex of body b + 1 on a face of body b: the face's vertex when b is whole and first by
+  // body_priority (face_leads), else the point.
+  int faces = 0;
+  for (std::int64_t b = 0; b < 200; ++b) {
+    const std::int64_t p[4] = {100 * b + 107, 100 * b + 3, 100 * b + 2, 100 * b + 1};
+    const bool leads = b % 2 == 0 && body_priority(b) < body_priority(b + 1);
+    EXPECT_EQ(anchor_slot(kPointFace, p, ids), leads ? 1 : 0) << "bodies " << b + 1 << ", " << b;
+    faces += leads;
+  }
+  EXPECT_GT(faces, 30);
+  EXPECT_LT(faces, 70);
 }
-
-// Two free boxes side by side along x (0.1 m cells), the cut through the second.
-const char* kTwoBodies = R"(
-run: {mode: dynamic, end_time: 1.0}
-materials: {m: {law: svk, E: 1.0e6, nu: 0.3, density: 1000}}
-contact: {d_dem: 0.01}
-bodies:
-  - {name: a, material: m, mesh: {type: box, size: [0.3, 0.2, 0.2], cells: [3, 2, 2]}}
-  - {name: b, material: m, mesh: {type: box, origin: [0.305, 0, 0], size: [0.3, 0.2, 0.2],
-     cells: [3, 2, 2]}}
-)";
 
 // The narrow phase skips an edge pair another rank evaluates before loading its vertices, from
 // one key per edge (ContactTopology::evaluates_edges): the same answer as the record's anchor
