@@ -75,18 +75,23 @@ namespace qdemsph {
 struct Evaluator {
   View<const std::uint64_t> vgid;
   View<const std::int32_t> vbody;
-  View<const std::uint8_t> bwhole;  // per body, BodyWhole (with ghosts only)
+  View<const std::uint32_t> blead;  // per body, body_priority << 2 | BodyWhole (with ghosts)
   std::int64_t nfv = 0, nfree = 0;  // owned free vertices; all free vertices held
   bool all = true;                  // one process (no ghosts): every record, no test needed
   QDEMSPH_HD bool free(int i) const { return i < nfree; }
   QDEMSPH_HD std::uint64_t gid(int i) const { return vgid[i]; }
   QDEMSPH_HD std::int32_t body(int i) const { return vbody[i]; }
-  QDEMSPH_HD bool whole(std::int64_t b) const { return bwhole[b] != kSplit; }
+  QDEMSPH_HD bool whole(std::int64_t b) const { return (blead[b] & 3) != kSplit; }
+  QDEMSPH_HD bool whole_here(std::int64_t b) const { return (blead[b] & 3) == kWholeHere; }
   // A free vertex another rank owns.
   QDEMSPH_HD bool ghost(int i) const { return !all && i >= nfv && free(i); }
-  // Of two distinct bodies, the one whose faces lead (face_leads), -1 when neither does.
+  // Of two bodies, the one whose faces lead (face_leads), -1 when neither does: from the table,
+  // no hash in the narrow phase.
   QDEMSPH_HD int leading_body(int a, int b) const {
-    return face_leads(*this, a, b) ? b : (face_leads(*this, b, a) ? a : -1);
+    const std::uint32_t ka = blead[a], kb = blead[b];
+    if ((kb >> 2) < (ka >> 2)) return (kb & 3) != kSplit ? b : -1;
+    if ((ka >> 2) < (kb >> 2)) return (ka & 3) != kSplit ? a : -1;
+    return -1;
   }
   QDEMSPH_HD bool owns(int type, const std::int32_t* v) const {
     if (all) return true;
@@ -170,20 +175,24 @@ struct ContactTopology {
     }
     const bool test_anchor = !eval.all && !all_owned;
     const double tol = 1e-9 * pen;  // >> the round-off of a plane distance, << any gap
-    // A body whose faces lead (face_leads) has every point-face test of the pair on its rank;
-    // else a free vertex's touches are tested on its owner.
-    const int lead = test_anchor && !same ? eval.leading_body(ba, bb) : -1;
+    // A free vertex's touches are tested on its owner, but those on the faces of a body that
+    // leads (face_leads) on the rank holding that body whole (a pair of two free bodies whose
+    // leader another rank holds is no candidate here). led[side]: side's points on such faces.
+    bool led[2] = {false, false};
+    if (test_anchor && !same) {
+      const int l = eval.leading_body(ba, bb);
+      led[0] = l == bb && eval.whole_here(bb);
+      led[1] = l == ba && eval.whole_here(ba);
+    }
     // Point-face both ways.
     for (int side = 0; side < 2; ++side) {
       const std::int64_t s1 = side == 0 ? a : b, s2 = side == 0 ? b : a;
-      const bool led = lead >= 0 && lead == (side == 0 ? bb : ba);
-      if (led && eval.bwhole[lead] != kWholeHere) continue;
       const Vec3* p2 = side == 0 ? pb : pa;
       const Vec3 n2 = tri_n[s2];
       for (std::int64_t q = own_v_off[s1]; q < own_v_off[s1 + 1]; ++q) {
         const int A = own_v[q];
         if (same && tri_has(s2, A)) continue;
-        if (!led && eval.ghost(A)) continue;  // its owner tests a free vertex's touches
+        if (eval.ghost(A) && !led[side]) continue;
         const Vec3 xa = x[A];
         const double s_est = dot(xa - p2[0], n2);
         if (s_est > d_dem + tol || s_est < -pen - tol) continue;
@@ -394,9 +403,11 @@ class ContactStage {
       throw std::logic_error("contact stage: body_whole has " +
                              std::to_string(c.body_whole.size()) + " entries for " +
                              std::to_string(c.body_fixed.size()) + " bodies");
-    body_whole_.assign(c.body_whole.empty() ? std::vector<std::uint8_t>(nb, kSplit)
-                                            : std::vector<std::uint8_t>(c.body_whole.begin(),
-                                                                        c.body_whole.begin() + nb));
+    write_on_host(body_lead_, static_cast<std::int64_t>(nb), stage_, [&](std::uint32_t* k) {
+      for (std::size_t b = 0; b < nb; ++b)
+        k[b] = static_cast<std::uint32_t>(body_priority(static_cast<std::int64_t>(b)) << 2) |
+               (c.body_whole.empty() ? kSplit : c.body_whole[b]);
+    });
     upload_edge_anchors(m);
     std::vector<std::int64_t> every(ghosts_ ? nfv_ : 0);
     std::iota(every.begin(), every.end(), std::int64_t{0});
@@ -602,7 +613,7 @@ class ContactStage {
         Exec{}, n_prev_, QDEMSPH_LAMBDA(std::int64_t c) { return en[c]; });
   }
   Evaluator evaluator() const {
-    return {vgid_.cview(), vertex_body_.cview(), body_whole_.cview(), nfv_, nfree_, !ghosts_};
+    return {vgid_.cview(), vertex_body_.cview(), body_lead_.cview(), nfv_, nfree_, !ghosts_};
   }
   // Energy dissipated by the contact dashpots and Coulomb slip since the start [J].
   double dissipated_energy() const { return dissipated_; }
@@ -762,7 +773,7 @@ class ContactStage {
           if (fixed[bi] && fixed[bj]) return false;
           if (ghosts && !fixed[bj]) {
             const int lead = bi != bj ? ev.leading_body(bi, bj) : -1;
-            if (lead >= 0) return ev.bwhole[lead] == kWholeHere;
+            if (lead >= 0) return ev.whole_here(lead);
             bool owned = false;
             for (int a = 0; a < 8 && !owned; ++a) {
               const int va = pvv[(a & 3) * np + (a < 4 ? i : j)];
@@ -1248,7 +1259,7 @@ class ContactStage {
   Buffer<std::int32_t> edge_tri_{S};
   Buffer<std::int32_t> tri_v_{S}, edge_v_{S}, prim_v_{S}, tri_body_{S}, prim_body_{S}, own_v_{S},
       own_e_{S}, prim_tri_{S}, wall_v_{S}, body_fixed_{S}, body_mat_{S}, vertex_body_{S};
-  Buffer<std::uint8_t> body_whole_{S};  // ContactModel::body_whole (kSplit where it has none)
+  Buffer<std::uint32_t> body_lead_{S};  // Evaluator::blead (kSplit where body_whole is empty)
   Buffer<std::uint64_t> vgid_{S}, edge_anchor_{S};
   Buffer<std::int64_t> own_v_off_{S}, own_e_off_{S}, prim_tri_off_{S};
   Buffer<double> body_h_{S}, pair_mu_{S}, pair_zeta_{S}, pair_kn_{S}, pair_E_{S}, wall_{S},
