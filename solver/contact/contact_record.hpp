@@ -37,11 +37,7 @@ QDEMSPH_HD std::uint64_t contact_key1(int type, std::uint64_t id1) {
   return (static_cast<std::uint64_t>(type) << 60) | id1;
 }
 
-// A body's place in the order of anchors (22 bits of a hash of its id): an edge pair of two
-// bodies is anchored on the edge of the body that comes first, so the edge pairs across a
-// border split between its ranks body pair by body pair, each GPU thread's pair of primitives
-// wholly on one side (the smallest global id alone gave all of them to one rank); so are the
-// point-face touches on that body's faces when it is whole (face_leads).
+// A hash of a body's id, 22 bits (body_order).
 QDEMSPH_HD std::uint64_t body_priority(std::int64_t body) {
   std::uint64_t z = static_cast<std::uint64_t>(body) + 0x9E3779B97F4A7C15ull;  // splitmix64
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
@@ -53,14 +49,25 @@ QDEMSPH_HD std::uint64_t body_priority(std::int64_t body) {
 // its free vertices, this one or another; a fixed body, or a free one the cut divides, is split.
 enum BodyWhole : std::uint8_t { kSplit = 0, kWholeHere = 1, kWholeElsewhere = 2 };
 
+// A body's place in the order of anchors (23 bits): whole bodies (vs.whole(body)) first, then
+// by body_priority. An edge pair of two bodies is anchored on the edge of the body that comes
+// first, and so are the point-face touches on its faces when it is whole (face_leads): then
+// one rank evaluates every record of the two bodies. A pair across a border goes to the rank
+// holding one of its bodies whole wherever there is one, and the border's body pairs split
+// between its ranks (the smallest global id alone gave all of them to one rank).
+template <class Vertices>
+QDEMSPH_HD std::uint64_t body_order(const Vertices& vs, std::int64_t body) {
+  return (vs.whole(body) ? 0 : std::uint64_t{1} << 22) | body_priority(body);
+}
+
 // Whether the faces of body `face` take the point-face touches of body `point`'s vertices: the
-// face's body is whole and comes first by body_priority (as its edges anchor the pair's edge
-// pairs). Then one rank evaluates every record of the two bodies, so a pair of primitives
-// across a border is tested there only (the other rank drops it from its candidates); the
-// duplicate filter still sees all of a vertex's hits on one body on one rank. vs.whole(body).
+// face's body is whole and comes first by body_order (as its edges anchor the pair's edge
+// pairs). Then a pair of primitives across a border is tested on that body's rank only (the
+// other rank drops it from its candidates), and the duplicate filter still sees all of a
+// vertex's hits on one body on one rank.
 template <class Vertices>
 QDEMSPH_HD bool face_leads(const Vertices& vs, std::int64_t point, std::int64_t face) {
-  return point != face && vs.whole(face) && body_priority(face) < body_priority(point);
+  return point != face && vs.whole(face) && body_order(vs, face) < body_order(vs, point);
 }
 
 // The slot of the record's anchor vertex: in a distributed run the rank owning it evaluates
@@ -68,7 +75,7 @@ QDEMSPH_HD bool face_leads(const Vertices& vs, std::int64_t point, std::int64_t 
 // when the face's body leads (face_leads), else its side-1 vertex when it is free, as a wall
 // record's (the duplicate filter compares one vertex's point-face hits on one body, so they
 // stay together); else the free vertex with the smallest global id, for an edge pair among
-// those of the body first by body_priority; -1 when no vertex is free. v: the record's vertex
+// those of the body first by body_order; -1 when no vertex is free. v: the record's vertex
 // ids (-1: unused); vs.free(id), vs.gid(id), vs.body(id), vs.whole(body).
 template <class Id, class Vertices>
 QDEMSPH_HD int anchor_slot(int type, const Id* v, const Vertices& vs) {
@@ -79,7 +86,7 @@ QDEMSPH_HD int anchor_slot(int type, const Id* v, const Vertices& vs) {
   std::uint64_t best_p = 0;
   for (int k = 0; k < 4; ++k) {
     if (v[k] < 0 || !vs.free(v[k])) continue;
-    const std::uint64_t p = type == kEdgeEdge ? body_priority(vs.body(v[k])) : 0;
+    const std::uint64_t p = type == kEdgeEdge ? body_order(vs, vs.body(v[k])) : 0;
     if (best < 0 || p < best_p || (p == best_p && vs.gid(v[k]) < vs.gid(v[best]))) {
       best = k;
       best_p = p;

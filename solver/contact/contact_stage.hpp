@@ -75,7 +75,7 @@ namespace qdemsph {
 struct Evaluator {
   View<const std::uint64_t> vgid;
   View<const std::int32_t> vbody;
-  View<const std::uint32_t> blead;  // per body, body_priority << 2 | BodyWhole (with ghosts)
+  View<const std::uint32_t> blead;  // per body, body_order << 2 | BodyWhole (with ghosts)
   std::int64_t nfv = 0, nfree = 0;  // owned free vertices; all free vertices held
   bool all = true;                  // one process (no ghosts): every record, no test needed
   QDEMSPH_HD bool free(int i) const { return i < nfree; }
@@ -125,7 +125,7 @@ struct ContactTopology {
   double d_dem = 0;
   bool self_contact = false;
   Evaluator eval;  // feature pairs another rank evaluates are skipped
-  // On an MPI rank, per edge: body_priority of its body << 41 | 2 gid + 1 of its free end with
+  // On an MPI rank, per edge: body_order of its body << 41 | 2 gid + 1 of its free end with
   // the smallest global id when this rank owns that end, 2 gid when another rank does;
   // kNoFreeEnd when neither end is free (one process: empty). The smaller key of two edges is
   // their record's anchor (anchor_slot).
@@ -264,6 +264,12 @@ struct ContactTopology {
 };
 static_assert(std::is_trivially_copyable_v<ContactTopology>);
 
+// ContactModel::body_whole for body_order on the host (empty: every body split).
+struct WholeBodies {
+  const std::vector<std::uint8_t>& w;
+  bool whole(std::int64_t b) const { return !w.empty() && w[b] != kSplit; }
+};
+
 // Appends a record through an atomic counter (ContactStage::narrow_phase): slot k = count++,
 // written when k < cap (the caller re-runs with a larger buffer when count ends above cap).
 struct AppendRecord {
@@ -322,13 +328,14 @@ class ContactStage {
     const std::int64_t ne = ghosts_ ? ne_ : 0, nfv = nfv_, nfree = nfree_, nv = nv_;
     const bool ids = static_cast<std::int64_t>(m.gid.size()) == nv;
     const auto& edges = m.contact.edges;
+    const WholeBodies whole{m.contact.body_whole};
     write_on_host(edge_anchor_, ne, stage_, [&](std::uint64_t* key) {
       for_each(HostExec{}, ne, [&](std::int64_t e) {
         std::uint64_t k = ContactTopology::kNoFreeEnd;
         for (const std::int32_t i : edges[e]) {  // both ends are of one body
           if (i >= nfree) continue;
           const std::uint64_t g = ids ? m.gid[i] : static_cast<std::uint64_t>(i);  // < 2^31
-          k = std::min(k, body_priority(m.body[i]) << 41 | (2 * g + (i < nfv ? 1 : 0)));
+          k = std::min(k, body_order(whole, m.body[i]) << 41 | (2 * g + (i < nfv ? 1 : 0)));
         }
         key[e] = k;
       });
@@ -412,9 +419,10 @@ class ContactStage {
       throw std::logic_error("contact stage: body_whole has " +
                              std::to_string(c.body_whole.size()) + " entries for " +
                              std::to_string(c.body_fixed.size()) + " bodies");
+    const WholeBodies whole{c.body_whole};
     write_on_host(body_lead_, static_cast<std::int64_t>(nb), stage_, [&](std::uint32_t* k) {
       for (std::size_t b = 0; b < nb; ++b)
-        k[b] = static_cast<std::uint32_t>(body_priority(static_cast<std::int64_t>(b)) << 2) |
+        k[b] = static_cast<std::uint32_t>(body_order(whole, static_cast<std::int64_t>(b)) << 2) |
                (c.body_whole.empty() ? kSplit : c.body_whole[b]);
     });
     upload_edge_anchors(m);

@@ -326,16 +326,22 @@ TEST(LocalModel, CornerListsAreInTheOneRankOrder) {
   }
 }
 
-// The anchor of a record (the rank owning it evaluates it): a point-face or wall record's free
+// The anchor of a record (the rank owning it evaluates it): a point-face record's face vertex
+// when the face's body is whole and first (face_leads), else a point-face or wall record's free
 // side-1 vertex, else the free vertex of smallest global id (for an edge pair, of the body
-// first by body_priority), or none.
+// first: a whole body before a split one, else by body_priority), or none.
 TEST(LocalModel, AnchorSlotKnownAnswers) {
   struct Ids {  // gid = index; ids >= 1000000 are a fixed body's; body = id / 100
     bool free(std::int64_t i) const { return i < 1000000; }
     std::uint64_t gid(std::int64_t i) const { return static_cast<std::uint64_t>(i); }
     std::int64_t body(std::int64_t i) const { return i / 100; }
-    bool whole(std::int64_t b) const { return b % 2 == 0; }
+    bool whole(std::int64_t b) const { return b % 3 != 0; }
   } ids;
+  // Which of bodies b, b + 1 comes first.
+  auto first = [&](std::int64_t b) {
+    if (ids.whole(b) != ids.whole(b + 1)) return ids.whole(b) ? b : b + 1;
+    return body_priority(b + 1) < body_priority(b) ? b + 1 : b;
+  };
   const std::int64_t pf[4] = {7, 3, 2, 1}, wall[4] = {7, -1, -1, -1};
   EXPECT_EQ(anchor_slot(kPointFace, pf, ids), 0);
   EXPECT_EQ(anchor_slot(kWall, wall, ids), 0);
@@ -347,37 +353,40 @@ TEST(LocalModel, AnchorSlotKnownAnswers) {
   EXPECT_EQ(anchor_slot(kEdgeEdge, fixed_edge, ids), 3);
   const std::int64_t none[4] = {1000001, 1000002, -1, -1};
   EXPECT_EQ(anchor_slot(kEdgeEdge, none, ids), -1);
-  // Two free bodies' edges: the smaller id of the edge of the body first by body_priority,
-  // whichever edge comes first in the record; over 200 body pairs each side anchors about half.
-  int lower = 0;
-  for (std::int64_t b = 0; b < 200; ++b) {
+  // Two free bodies' edges: the smaller id of the edge of the body first, whichever edge comes
+  // first in the record; where both bodies are whole or split, each side anchors about half.
+  int lower = 0, ties = 0;
+  for (std::int64_t b = 0; b < 300; ++b) {
     const std::int64_t e[4] = {100 * b + 5, 100 * b + 9, 100 * b + 107, 100 * b + 103};
     const std::int64_t swapped[4] = {e[2], e[3], e[0], e[1]};
     const int k = anchor_slot(kEdgeEdge, e, ids);
-    EXPECT_EQ(k, body_priority(b + 1) < body_priority(b) ? 3 : 0)
-        << "bodies " << b << ", " << b + 1;
+    EXPECT_EQ(k, first(b) == b ? 0 : 3) << "bodies " << b << ", " << b + 1;
     EXPECT_EQ(swapped[anchor_slot(kEdgeEdge, swapped, ids)], e[k]);
-    lower += k == 0;
+    if (ids.whole(b) == ids.whole(b + 1)) {
+      ++ties;
+      lower += k == 0;
+    }
   }
-  EXPECT_GT(lower, 70);
-  EXPECT_LT(lower, 130);
-  // A vertex of body b + 1 on a face of body b: the face's vertex when b is whole and first by
-  // body_priority (face_leads), else the point.
+  EXPECT_EQ(ties, 100);
+  EXPECT_GT(lower, 30);
+  EXPECT_LT(lower, 70);
+  // A vertex of body b + 1 on a face of body b: the face's vertex when b is whole and first
+  // (face_leads), else the point.
   int faces = 0;
-  for (std::int64_t b = 0; b < 200; ++b) {
+  for (std::int64_t b = 0; b < 300; ++b) {
     const std::int64_t p[4] = {100 * b + 107, 100 * b + 3, 100 * b + 2, 100 * b + 1};
-    const bool leads = b % 2 == 0 && body_priority(b) < body_priority(b + 1);
+    const bool leads = ids.whole(b) && first(b) == b;
     EXPECT_EQ(anchor_slot(kPointFace, p, ids), leads ? 1 : 0) << "bodies " << b + 1 << ", " << b;
     faces += leads;
   }
-  EXPECT_GT(faces, 30);
-  EXPECT_LT(faces, 70);
+  EXPECT_GT(faces, 100);  // the 100 whole bodies b before a split b + 1, and some of the others
+  EXPECT_LT(faces, 200);
 }
 
 // The narrow phase skips an edge pair another rank evaluates before loading its vertices, from
 // one key per edge (ContactTopology::evaluates_edges): the same answer as the record's anchor
 // (Evaluator::owns) for every pair of edges in each part, across the cut too; for a body and
-// a fixed floor (kScene) and for two free bodies (kTwoBodies: body_priority).
+// a fixed floor (kScene) and for two free bodies (kTwoBodies: body_order).
 class EdgeKeys : public ::testing::TestWithParam<std::pair<const char*, double>> {};
 INSTANTIATE_TEST_SUITE_P(LocalModel, EdgeKeys,
                          ::testing::Values(std::pair{kScene, 0.3}, std::pair{kTwoBodies, 0.35}));
