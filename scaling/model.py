@@ -22,8 +22,11 @@ Time per step of rank r (the step ends when the slowest rank ends):
        0.48, 0.29. It was 1.4 when every rank evaluated every pair it held (wip-mpi aef1376,
        CPU ranks 2, 4, 8: pairs 1.34, 1.80, 3.00 x with the held surface 1.25, 1.56, 2.44 x:
        k = 1.38, 1.43, 1.38; references/benchmarks/scaling/halo_validation_cubes_devvm.json).
-       k = 0: a candidate pair of border primitives searched on one rank only
-       (docs/parallel.md "Not yet done");
+       Since whole bodies lead their body pairs (5038aab: one rank searches a pair with a whole
+       body) the cube block gives k = 0.27 / 0.21 on 2 / 4 H200s (pairs 1.034 / 1.067 x;
+       references/benchmarks/scaling/2026-11-26_h200_whole_bodies_lead/); the default stays
+       0.6, the value the cost set and the fitted round trip were calibrated with.
+       k = 0: every candidate pair of border primitives searched on one rank only;
        g: the share of a particle's work a ghost costs, 0.15 (a ghost is sorted into the cell
        list; the density and force loops run over owned particles only).
        Balancer: when max_r C_r / mean C - 1 exceeds the rebalance threshold (0.10, the
