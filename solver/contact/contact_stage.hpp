@@ -423,7 +423,7 @@ class ContactStage {
     write_on_host(body_lead_, static_cast<std::int64_t>(nb), stage_, [&](std::uint32_t* k) {
       for (std::size_t b = 0; b < nb; ++b)
         k[b] = static_cast<std::uint32_t>(body_order(whole, static_cast<std::int64_t>(b)) << 2) |
-               (c.body_whole.empty() ? kSplit : c.body_whole[b]);
+               (c.body_whole.empty() ? std::uint8_t{kSplit} : c.body_whole[b]);
     });
     upload_edge_anchors(m);
     std::vector<std::int64_t> every(ghosts_ ? nfv_ : 0);
