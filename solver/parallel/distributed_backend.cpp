@@ -131,6 +131,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     g_ = &m;
     ix_ = index_model(m);
     owner_.assign(m.n_vertices(), -1);  // fixed bodies: no owner
+    body_rank_.assign(m.bodies.size(), -1);
     contact_ = m.contact.enabled;
     fixed_cells_.clear();
     if (contact_) {
