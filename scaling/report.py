@@ -98,6 +98,8 @@ def spread(runs) -> str:
 
 def efficiencies(rs, mode):
     t = {r["ranks"]: r["step_s"] for r in rs}
+    # Contact work a rank: candidate pairs summed over the ranks, per rank, against one rank's.
+    pairs = {r["ranks"]: (r.get("items") or {}).get("contact_pairs") or 0 for r in rs}
     rows = []
     for r in rs:
         n = r["ranks"]
@@ -111,6 +113,8 @@ def efficiencies(rs, mode):
                 row[f"E{ref}"] = t[ref] / t[n] if mode == "weak" else ref * t[ref] / (n * t[n])
         if mode == "strong" and min(t) in t:
             row["speedup"] = t[min(t)] / t[n]
+        if mode == "weak" and pairs.get(1) and pairs[n]:
+            row["pairs_ratio"] = pairs[n] / (n * pairs[1])
         rows.append(row)
     return rows
 
@@ -170,9 +174,12 @@ def plots(recs):
         if cop:
             md.append("E vs 1 = node x decomposition: *node* = t(1) / t(N copies of the 1-rank run at once, "
                       "one per core), *decomposition* = t(N copies) / t(N ranks).\n")
+        if any("pairs_ratio" in r for r in rows):
+            md.append("*pairs/rank*: the contact candidate pairs a rank, against the 1-rank run's (above 1 where "
+                      "the grown scene gives a body more neighbours, or where two ranks test a pair).\n")
         md.append("| ranks | tets | particles | ms/step | runs: ms/step | E vs 1 | E vs 8 | node | decomposition | imbalance "
-                  "| busy imbalance | halo MB/step | fluid halo MB/step |")
-        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+                  "| busy imbalance | halo MB/step | fluid halo MB/step | pairs/rank |")
+        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
         for row in rows:
             f = lambda v, s="{:.3f}": "" if v is None else s.format(v)  # noqa: E731
             mb = lambda v: f(None if v is None else v / 1e6, "{:.2f}")  # noqa: E731
@@ -180,7 +187,7 @@ def plots(recs):
                       f"{row['step_s'] * 1e3:.2f} | {spread(row['runs'])} | {f(row.get('E1'))} | {f(row.get('E8'))} | "
                       f"{f(row.get('node'))} | {f(row.get('decomp'))} | "
                       f"{f(row['imbalance'])} | {f(row.get('busy_imbalance'))} | {mb(row['halo_bytes_per_step'])} | "
-                      f"{mb(row.get('fluid_halo_bytes_per_step'))} |")
+                      f"{mb(row.get('fluid_halo_bytes_per_step'))} | {f(row.get('pairs_ratio'))} |")
         # The model's geometry files are of the presets' sizes.
         pred = (model_line(rs, sweep, backend, ranks) if mode == "weak" and not variant and not params and len(rs) > 1
                 else None)

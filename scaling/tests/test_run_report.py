@@ -61,6 +61,15 @@ def test_weak_efficiency_against_1_and_8_ranks():
     assert "E8" not in rows[0]
 
 
+def test_pairs_a_rank_against_one_rank():
+    def with_pairs(n, pairs):
+        return {**rec(n, 1.0), "items": {"contact_pairs": pairs}}
+
+    rows = report.efficiencies([with_pairs(1, 1000), with_pairs(2, 2068), rec(4, 1.2)], "weak")
+    assert rows[0]["pairs_ratio"] == pytest.approx(1.0) and rows[1]["pairs_ratio"] == pytest.approx(1.034)
+    assert "pairs_ratio" not in rows[2]  # no contact pairs in that record
+
+
 def test_strong_efficiency():
     rows = report.efficiencies([rec(1, 8.0, "strong"), rec(4, 2.5, "strong")], "strong")
     assert rows[1]["E1"] == pytest.approx(8.0 / (4 * 2.5)) and rows[1]["speedup"] == pytest.approx(3.2)
