@@ -8,6 +8,7 @@
 //                    boundary and halo tets; then the gather, loads and contact of owned
 //                    vertices.
 //   kick, drift, damped_step, zero_velocity, mark_relax_start    owned vertices, no messages
+//                    (on a GPU drift also queues the next evaluation's skin test and packing)
 //   energies, static_stats, find_non_finite, take_inverted_tet    local part + MPI_Allreduce
 //                    (energies count home tets and owned vertices once; ids are global, so
 //                    the Stepper's messages name the right element)
