@@ -245,12 +245,12 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   }
   // On a GPU the next force evaluation's skin-test reduction and halo packing are queued with
   // the drift, which makes x final: they run before the drift's scope synchronises, and the
-  // interior tets start as soon as compute_forces queues them (cube block, 2 GPUs: the tets were
-  // queued ~25 us after the drift had ended, the device idle meanwhile).
+  // interior tets start as soon as compute_forces queues them (cube block, 2 GPUs: the device
+  // had waited 15-25 us a step more than on one GPU for those launches).
   void drift(double h) override {
     auto s = timers_.scope("integration");
     local_->drift(h);
-    if (halo_ && halo_->engine().packed_space() == Space::Cuda) {
+    if (device_halo()) {
       queue_skin(timers_);
       queue_pack(timers_);
       queued_ = true;
@@ -866,13 +866,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     if (!held_deep_ || c->vertex < held_deep_->vertex) held_deep_ = c;
   }
 
-  // Packs the ghosts' x, v and starts their exchange, and queues the interior tets (their
-  // vertices are all owned): on a GPU they run while the records are copied (on the copy
-  // stream) and unpacked; with the boundary tets queued after the halo, their device time
-  // counts in the contact stage's first synchronised phase (contact.broad), as on one process.
-  // Records staged through the host are posted before the interior tets, so that the messages
-  // travel meanwhile; device-resident ones after, begin_packed waiting for the pack only
-  // (mark_packed).
+  // The halo's records stay on the GPUs (CommEngine::use_device).
+  bool device_halo() const { return halo_ && halo_->engine().packed_space() == Space::Cuda; }
+
   // The skin test's reduction (contact band: how far a vertex moved since the layout).
   void queue_skin(PhaseTimers& tm) {
     if (!contact_) return;
@@ -892,11 +888,16 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     e.mark_packed();
   }
 
-  // Sends what queue_pack packed and queues the interior tets: on a GPU the tets
-  // first, so the send's wait for the packing does not hold them back.
+  // Starts the exchange of what queue_pack packed, and queues the interior tets (their
+  // vertices are all owned): on a GPU they run while the records are copied (on the copy
+  // stream) and unpacked; with the boundary tets queued after the halo, their device time
+  // counts in the contact stage's first synchronised phase (contact.broad), as on one process.
+  // Records staged through the host are posted before the interior tets, so that the messages
+  // travel meanwhile; device-resident ones after, begin_packed waiting for the pack only
+  // (mark_packed), so that the wait does not hold the tets back.
   void start_halo(PhaseTimers& tm, double dt_diss) {
     CommEngine& e = halo_->engine();
-    const bool device = e.packed_space() == Space::Cuda;
+    const bool device = device_halo();
     if (!device) {
       auto s = tm.launch("halo");
       auto s1 = tm.launch("halo.xv");

@@ -137,12 +137,6 @@ TEST(Distributed, ContactEqualsOneRankBitForBit) {
   EXPECT_LT(d.energy, 1e-12);
 }
 
-// The inverted-tet error of a distributed run: a cube whose top vertex is driven through it
-// at 30 m/s, against a contact wall, rebuilt as vertices pass the contact slack and re-cut at
-// every step, stops at the one-rank run's step naming a tet that is inverted (any flagged one
-// may be named, on one rank too). Flags raised before a rebuild are kept in global ids
-// (hold_flags); this scene's rebuilds keep the flagged tets' local indices, so it checks the
-// error path, not a shifted index.
 // On a GPU machine (skipped elsewhere): the distributed stepper over CUDA backends, one GPU a
 // rank, equals one GPU bit for bit on the contact scene, re-cut every 25 steps (the halo
 // resident on the devices, the skin test and packing queued with the drift, the contact shares).
@@ -168,6 +162,12 @@ TEST(Distributed, GpuRanksEqualOneGpuBitForBit) {
   EXPECT_EQ(max_diff(a.v, b.v), 0.0);
 }
 
+// The inverted-tet error of a distributed run: a cube whose top vertex is driven through it
+// at 30 m/s, against a contact wall, rebuilt as vertices pass the contact slack and re-cut at
+// every step, stops at the one-rank run's step naming a tet that is inverted (any flagged one
+// may be named, on one rank too). Flags raised before a rebuild are kept in global ids
+// (hold_flags); this scene's rebuilds keep the flagged tets' local indices, so it checks the
+// error path, not a shifted index.
 TEST(Distributed, InvertedTetStopsTheRunAsOnOneRank) {
   const Problem r = load(R"(
 run: {end_time: 1}
