@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "core/vec.hpp"
 
@@ -35,6 +36,25 @@ QDEMSPH_HD bool key_less(const ContactRecord& a, const ContactRecord& b) {
 
 QDEMSPH_HD std::uint64_t contact_key1(int type, std::uint64_t id1) {
   return (static_cast<std::uint64_t>(type) << 60) | id1;
+}
+
+// The id1 bits of k1.
+inline constexpr std::uint64_t kIdMask = (std::uint64_t{1} << 60) - 1;
+
+// A key of a rank's model in global feature ids: vertices are keyed by global id already
+// (ContactTopology::vgid), edges and triangles are numbered per model (in global order) and
+// translated by `edge` and `triangle` (local -> global).
+QDEMSPH_HD std::uint64_t global_key1(std::uint64_t k1, const std::int64_t* edge) {
+  const int type = static_cast<int>(k1 >> 60);
+  if (type != kEdgeEdge) return k1;
+  return contact_key1(type, static_cast<std::uint64_t>(edge[k1 & kIdMask]));
+}
+QDEMSPH_HD std::uint64_t global_key2(std::uint64_t k1, std::uint64_t k2,
+                                     const std::int64_t* triangle, const std::int64_t* edge) {
+  const int type = static_cast<int>(k1 >> 60);
+  if (type == kPointFace) return static_cast<std::uint64_t>(triangle[k2]);
+  if (type == kEdgeEdge) return static_cast<std::uint64_t>(edge[k2]);
+  return k2;  // wall index
 }
 
 // A hash of a body's id, 22 bits (body_order).
@@ -95,15 +115,25 @@ QDEMSPH_HD int anchor_slot(int type, const Id* v, const Vertices& vs) {
   return best;
 }
 
-// A contact force share for a vertex another rank owns (a distributed run): the record's key,
-// the vertex's slot in it and the force; `vertex` is a local index in a rank's model and a
-// global id between ranks (FeatureIds::to_global / to_local translate the key and the vertex).
-// The owner sums its vertex's shares with its own in key, then slot order: the one-rank order.
+// A contact force share for a vertex another rank owns (a distributed run), as it travels:
+// written so by the rank that evaluated the record (ContactStage::compact_shares, with the
+// layout's ShareRoutes), read as it is by the owner, which sums its vertex's shares with its own
+// entries in key, then slot order: the one-rank order.
 struct ContactShare {
-  std::uint64_t k1 = 0, k2 = 0;
-  std::int64_t vertex = -1;
-  std::int32_t slot = 0;
+  std::uint64_t k1 = 0, k2 = 0;  // the record's key in global feature ids
+  std::int64_t vertex = -1;      // the vertex's index in its owner's model
+  std::int32_t slot = 0;         // the vertex's slot in the record
+  std::int32_t rank = -1;        // the vertex's owner
   Vec3 f;
+};
+
+// Where a rank's shares go (a distributed layout, ContactStage::set_share_routes): for each
+// free vertex it holds but does not own (local index n_owned + k), the owner's rank and the
+// vertex's index there; and the global ids of its model's surface triangles and edges, which
+// key the shares.
+struct ShareRoutes {
+  std::vector<std::int32_t> rank, index;
+  std::vector<std::int64_t> triangle, edge;
 };
 
 }  // namespace qdemsph

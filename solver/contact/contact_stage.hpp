@@ -44,9 +44,9 @@
 #include <memory>
 #include <numeric>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
-#include <tuple>
 #include <utility>
 
 #include "contact/contact_record.hpp"
@@ -282,27 +282,27 @@ struct AppendRecord {
   }
 };
 
-// The contact entries a vertex sums: e < nl the local ones (record e / 4, slot e % 4: the
-// records are sorted by key), then the shares other ranks sent. before(a, b): by record key,
-// then slot, the order of one process.
-struct ContactEntries {
-  std::int64_t nl = 0;
-  Vec3CView f;
+// A vertex's own contact entries (e: record e / 4, slot e % 4, keys in this model's ids) against
+// the shares other ranks sent for it (keys in global ids), in the one-process order: by record
+// key, then slot. `triangle`, `edge`: this model's global ids (ShareRoutes).
+struct ShareOrder {
   View<const std::uint64_t> k1, k2;
-  View<const ContactShare> in;
-  QDEMSPH_HD Vec3 force(std::int64_t e) const { return e < nl ? f[e] : in[e - nl].f; }
-  QDEMSPH_HD bool before(std::int64_t a, std::int64_t b) const {
-    if (a < nl && b < nl) return a < b;
-    const std::uint64_t a1 = a < nl ? k1[a / 4] : in[a - nl].k1,
-                        b1 = b < nl ? k1[b / 4] : in[b - nl].k1;
-    if (a1 != b1) return a1 < b1;
-    const std::uint64_t a2 = a < nl ? k2[a / 4] : in[a - nl].k2,
-                        b2 = b < nl ? k2[b / 4] : in[b - nl].k2;
-    if (a2 != b2) return a2 < b2;
-    return (a < nl ? a % 4 : in[a - nl].slot) < (b < nl ? b % 4 : in[b - nl].slot);
+  View<const std::int64_t> triangle, edge;
+  QDEMSPH_HD bool entry_first(std::int64_t e, const ContactShare& s) const {
+    const std::uint64_t a1 = k1[e / 4], g1 = global_key1(a1, edge.p);
+    if (g1 != s.k1) return g1 < s.k1;
+    const std::uint64_t g2 = global_key2(a1, k2[e / 4], triangle.p, edge.p);
+    if (g2 != s.k2) return g2 < s.k2;
+    return e % 4 < s.slot;
   }
 };
-static_assert(std::is_trivially_copyable_v<ContactEntries>);
+static_assert(std::is_trivially_copyable_v<ShareOrder>);
+
+QDEMSPH_HD bool share_less(const ContactShare& a, const ContactShare& b) {
+  if (a.k1 != b.k1) return a.k1 < b.k1;
+  if (a.k2 != b.k2) return a.k2 < b.k2;
+  return a.slot < b.slot;
+}
 
 template <class Exec>
 class ContactStage {
@@ -429,6 +429,7 @@ class ContactStage {
     std::vector<std::int64_t> every(ghosts_ ? nfv_ : 0);
     std::iota(every.begin(), every.end(), std::int64_t{0});
     set_share_targets(every);  // until the rank's halo narrows them (set_share_targets)
+    route_rank_.resize(0);     // the routes of an earlier layout (set_share_routes)
     pc_.resize(np_);
     pr_.resize(np_);
     pc_ref_.resize(np_);
@@ -480,13 +481,16 @@ class ContactStage {
   }
 
   // The last evaluation's force shares of free vertices held but not owned (an MPI rank's
-  // ghosts; none on one process), keys and vertices in this model's ids, in no fixed order.
-  // The force law compacted them and queued their count's copy (queue_shares). Meanwhile each
-  // vertex's own entries are sorted and summed (gather_local): on a GPU that runs while the host
-  // reads the shares and the ranks exchange them. A vertex no other rank holds gets its sum in
-  // f now; add_forces merges the others' with what arrives.
-  std::vector<ContactShare> shares(Vec3View f) {
+  // ghosts; none on one process), as they travel (ContactShare: the owner's rank and index,
+  // global keys), in no fixed order; valid until the next call. The force law compacted them
+  // and queued their count's copy (queue_shares). Meanwhile each vertex's own entries are
+  // sorted and summed (gather_local): on a GPU that runs while the host reads the shares (into
+  // page-locked memory) and the ranks exchange them. A vertex no other rank holds gets its sum
+  // in f now; add_forces merges the others' with what arrives.
+  std::span<const ContactShare> shares(Vec3View f) {
     if (!ghosts_) return {};
+    if (route_rank_.size() != nfree_ - nfv_)
+      throw std::logic_error("contact stage: shares without their routes (set_share_routes)");
     gather_local(f);
     int count = 0;
     if constexpr (S == Space::Cuda) {
@@ -501,16 +505,22 @@ class ContactStage {
       compact_shares(4 * n_prev_, pk1_.cview(), pk2_.cview());
       if constexpr (S == Space::Cuda) shares_mark_.record();
     }
-    std::vector<ContactShare> h(n);
-    read_marked(h.data(), out_.cview().p, sizeof(ContactShare) * n);
-    return h;
+    if constexpr (S == Space::Cuda) {
+      const std::size_t bytes = sizeof(ContactShare) * n;
+      share_read_.resize(bytes);
+      read_marked(share_read_.data(), out_.cview().p, bytes);
+      return {reinterpret_cast<const ContactShare*>(share_read_.data()),
+              static_cast<std::size_t>(n)};
+    } else {
+      return {out_.cview().p, static_cast<std::size_t>(n)};
+    }
   }
 
   // f[i] += contact force on vertex i, for free vertices i < n_free_vertices, of the last
-  // evaluation and of `in`: shares other ranks evaluated (keys and vertices in this model's
-  // ids; only for share targets). Each vertex sums its entries sorted by record key, then
+  // evaluation and of `in`: shares other ranks evaluated for this rank's vertices, as they
+  // arrive (only for share targets). Each vertex sums its entries sorted by record key, then
   // slot: the one-rank order (deterministic, no atomics in the sums).
-  void add_forces(Vec3View f, const std::vector<ContactShare>& in = {}) {
+  void add_forces(Vec3View f, std::span<const ContactShare> in = {}) {
     PhaseTimers scratch;
     auto scope = (timed_ ? timers_ : scratch).scope("contact.force");
     if (!ghosts_) {
@@ -537,6 +547,25 @@ class ContactStage {
     share_flag_.assign(flag);
     share_v_.assign(list);
     share_host_ = std::move(flag);
+  }
+
+  // Where this rank's shares go (ShareRoutes, from its layout): the owners of the free vertices
+  // it holds but does not own, and its triangles' and edges' global ids, which key the shares.
+  // upload() drops them: a model with such vertices needs them before its first shares().
+  void set_share_routes(const ShareRoutes& r) {
+    const auto nghost = static_cast<std::size_t>(nfree_ - nfv_);
+    if (r.rank.size() != nghost || r.index.size() != nghost ||
+        r.triangle.size() != static_cast<std::size_t>(ntri_) ||
+        r.edge.size() != static_cast<std::size_t>(ne_))
+      throw std::logic_error("contact stage: share routes for " + std::to_string(r.rank.size()) +
+                             " vertices, " + std::to_string(r.triangle.size()) + " triangles, " +
+                             std::to_string(r.edge.size()) + " edges; the model holds " +
+                             std::to_string(nghost) + ", " + std::to_string(ntri_) + ", " +
+                             std::to_string(ne_));
+    route_rank_.assign(r.rank);
+    route_index_.assign(r.index);
+    tri_gid_.assign(r.triangle);
+    edge_gid_.assign(r.edge);
   }
 
   // The state between steps (contact_state.hpp): the whole history of the last force
@@ -649,7 +678,8 @@ class ContactStage {
            ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() + pr_ref_.bytes() +
            cells_.bytes() + pairs_.bytes() + vgid_.bytes() + edge_anchor_.bytes() +
            rec_tmp_.bytes() + in_.bytes() + sl_.bytes() + share_flag_.bytes() + share_v_.bytes() +
-           out_.bytes() + keep_.bytes();
+           out_.bytes() + keep_.bytes() + route_rank_.bytes() + route_index_.bytes() +
+           tri_gid_.bytes() + edge_gid_.bytes();
   }
 
   ContactTopology topology() const {
@@ -1143,7 +1173,8 @@ class ContactStage {
   }
 
   // The entries [0, ne) of free vertices held but not owned, as shares (keys k1, k2 of record
-  // e / 4), into out_; their count into count_, exact even when out_ is too small.
+  // e / 4, in global ids; the owner's rank and index from the routes), into out_; their count
+  // into count_, exact even when out_ is too small.
   void compact_shares(std::int64_t ne, View<const std::uint64_t> k1, View<const std::uint64_t> k2) {
     count_.zero();
     const auto evc = ent_v_.cview();
@@ -1152,6 +1183,9 @@ class ContactStage {
     ContactShare* out = out_.view().p;
     int* count = count_.view().p;
     const std::int64_t cap = out_.size();
+    const auto rank = route_rank_.cview(), index = route_index_.cview();
+    const std::int64_t* tri = tri_gid_.cview().p;
+    const std::int64_t* edge = edge_gid_.cview().p;
     for_each(
         Exec{}, ne, QDEMSPH_LAMBDA(std::int64_t e) {
           const int i = evc[e];
@@ -1159,9 +1193,10 @@ class ContactStage {
           const int k = atomic_inc(count);
           if (k >= cap) return;
           ContactShare s;
-          s.k1 = k1[e / 4];
-          s.k2 = k2[e / 4];
-          s.vertex = i;
+          s.k1 = global_key1(k1[e / 4], edge);
+          s.k2 = global_key2(k1[e / 4], k2[e / 4], tri, edge);
+          s.vertex = index[i - ev.nfv];
+          s.rank = rank[i - ev.nfv];
           s.slot = static_cast<std::int32_t>(e % 4);
           s.f = efc[e];
           out[k] = s;
@@ -1176,26 +1211,39 @@ class ContactStage {
     compact_shares(4 * nc, nk1_.cview(), nk2_.cview());
     if constexpr (S == Space::Cuda) {
       share_count_.resize(sizeof(int));
-      cuda_copy_to_host_queued(share_count_.data(), count_.cview().p, sizeof(int));
+      cuda_copy_queued(share_count_.data(), count_.cview().p, sizeof(int));
       shares_mark_.record();
     }
   }
 
   // f[i] += the contact force on each share target: gather_local's sum, or, for a vertex that
   // other ranks sent shares for, its entries and those shares merged in key order and summed
-  // (the one-rank order). The shares are sorted by vertex, then key, on the host (they are few).
-  void merge_shares(Vec3View f, std::vector<ContactShare> in) {
-    std::sort(in.begin(), in.end(), [](const ContactShare& a, const ContactShare& b) {
-      return std::tie(a.vertex, a.k1, a.k2, a.slot) < std::tie(b.vertex, b.k1, b.k2, b.slot);
-    });
-    for (const ContactShare& c : in)
+  // (the one-rank order). The host orders the shares by vertex (64-bit keys: vertex, arrival)
+  // and queues their copy; each vertex's few are sorted by key on the device, where its
+  // entries are.
+  void merge_shares(Vec3View f, std::span<const ContactShare> in) {
+    const auto nin = static_cast<std::int64_t>(in.size());
+    std::vector<std::uint64_t> order(nin);
+    for (std::int64_t m = 0; m < nin; ++m) {
+      const ContactShare& c = in[m];
       if (c.vertex < 0 || c.vertex >= nfv_ || !share_host_[c.vertex])
         throw std::logic_error("contact share for vertex " + std::to_string(c.vertex) +
                                ", which is not a share target of this rank");
-    const auto nin = static_cast<std::int64_t>(in.size());
+      order[m] = static_cast<std::uint64_t>(c.vertex) << 32 | static_cast<std::uint64_t>(m);
+    }
+    std::sort(order.begin(), order.end());
     if (in_.size() < nin) in_.resize(nin + nin / 4 + 64);  // grows only: no allocation per step
-    if (nin > 0) space_copy(in_.view().p, S, in.data(), Space::Host, sizeof(ContactShare) * nin);
-    const ContactEntries ent{4 * n_prev_, ent_f_.cview(), pk1_.cview(), pk2_.cview(), in_.cview()};
+    ContactShare* sorted = in_.view().p;
+    if constexpr (S == Space::Cuda) {
+      share_write_.resize(sizeof(ContactShare) * nin);
+      sorted = reinterpret_cast<ContactShare*>(share_write_.data());
+    }
+    for (std::int64_t j = 0; j < nin; ++j) sorted[j] = in[order[j] & 0xffffffffu];
+    if constexpr (S == Space::Cuda)
+      if (nin > 0) cuda_copy_queued(in_.view().p, sorted, sizeof(ContactShare) * nin);
+    const ShareOrder ord{pk1_.cview(), pk2_.cview(), tri_gid_.cview(), edge_gid_.cview()};
+    const auto shares = in_.view();
+    const auto ef = ent_f_.cview();
     const auto vcnt = vcnt_.cview();
     const auto vent = vent_.cview();
     const auto sl = sl_.cview();
@@ -1203,21 +1251,30 @@ class ContactStage {
     for_each(
         Exec{}, share_v_.size(), QDEMSPH_LAMBDA(std::int64_t k) {
           const std::int64_t i = targets[k];
-          // This vertex's shares: [lo, end) of the sorted ones.
+          // This vertex's shares: [lo, end) of those ordered by vertex, sorted by key here.
           const std::int64_t lo =
-              lower_bound_index(nin, [&](std::int64_t m) { return ent.in[m].vertex < i; });
+              lower_bound_index(nin, [&](std::int64_t m) { return shares[m].vertex < i; });
           std::int64_t end = lo;
-          while (end < nin && ent.in[end].vertex == i) ++end;
+          while (end < nin && shares[end].vertex == i) ++end;
           const int b = vcnt[i], e = vcnt[i + 1];
           if (lo == end) {
             if (b < e) f.set(i, f[i] + sl[i]);
             return;
           }
+          for (std::int64_t c = lo + 1; c < end; ++c) {
+            const ContactShare val = shares[c];
+            std::int64_t j = c - 1;
+            while (j >= lo && share_less(val, shares[j])) {
+              shares[j + 1] = shares[j];
+              --j;
+            }
+            shares[j + 1] = val;
+          }
           Vec3 s{};
           int a = b;
           for (std::int64_t c = lo; a < e || c < end;) {
-            const bool local = c == end || (a < e && ent.before(vent[a], ent.nl + c));
-            s += local ? ent.force(vent[a++]) : ent.force(ent.nl + c++);
+            const bool local = c == end || (a < e && ord.entry_first(vent[a], shares[c]));
+            s += local ? ef[vent[a++]] : shares[c++].f;
           }
           f.set(i, f[i] + s);
         });
@@ -1285,7 +1342,10 @@ class ContactStage {
   CellList<Exec> cells_;
   CandidatePairs<Exec> pairs_;
   Buffer<ContactRecord> rec_{S}, rec_tmp_{S};
-  Buffer<ContactShare> in_{S}, out_{S};   // shares received and to send (add_forces, shares)
+  Buffer<ContactShare> in_{S}, out_{S};    // shares received and to send (add_forces, shares)
+  StagingBytes share_read_, share_write_;  // a GPU's shares on the host: out_'s, in_'s
+  Buffer<std::int32_t> route_rank_{S}, route_index_{S};  // ShareRoutes (set_share_routes)
+  Buffer<std::int64_t> tri_gid_{S}, edge_gid_{S};
   Vec3Buffer sl_{S};                      // an MPI rank's local contact force sums (gather_local)
   Buffer<std::uint8_t> share_flag_{S};    // per owned vertex: a share target (set_share_targets)
   Buffer<std::int32_t> share_v_{S};       // the share targets, increasing

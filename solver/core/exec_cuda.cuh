@@ -148,8 +148,8 @@ void reduce_max_to(CudaExec, std::int64_t n, F f, double init, double* out) {
     *out = init;
     return;
   }
-  cuda_copy_to_host_queued(out, cuda_detail::reduce_queue(n, f, cuda_detail::MaxOp{}, init),
-                           sizeof(double));
+  cuda_copy_queued(out, cuda_detail::reduce_queue(n, f, cuda_detail::MaxOp{}, init),
+                   sizeof(double));
 }
 
 inline void exec_sync(CudaExec) {

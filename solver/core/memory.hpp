@@ -41,10 +41,10 @@ void cuda_sync();
 // peer copies overlap the interior work. cuda_copy_wait returns when those copies are done.
 void cuda_copy_async(void* dst, const void* src, std::size_t bytes);
 void cuda_copy_wait();
-// A device-to-host copy queued on the default stream after the kernels queued so far; into
-// page-locked memory it returns at once, and the bytes are there once a DeviceMark recorded
-// after it has been waited for.
-void cuda_copy_to_host_queued(void* dst, const void* src, std::size_t bytes);
+// A copy between page-locked host memory and this process's device memory (either way), queued
+// on the default stream: after the kernels queued so far, before those queued later. It returns
+// at once; the bytes are there once a DeviceMark recorded after it has been waited for.
+void cuda_copy_queued(void* dst, const void* src, std::size_t bytes);
 // A point in this process's default-stream work (a CUDA event): record() after the work queued
 // so far, wait() returns once that work is done while work queued later runs on. wait() before
 // any record() returns at once. Only for device work: record() makes the process's GPU context.

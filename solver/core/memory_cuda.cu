@@ -240,8 +240,8 @@ void cuda_copy_wait() {
   QDEMSPH_CUDA_CHECK(cudaStreamSynchronize(copy_stream()), "cudaStreamSynchronize");
 }
 
-void cuda_copy_to_host_queued(void* dst, const void* src, std::size_t bytes) {
-  QDEMSPH_CUDA_CHECK(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDeviceToHost),
+void cuda_copy_queued(void* dst, const void* src, std::size_t bytes) {
+  QDEMSPH_CUDA_CHECK(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDefault),
                      "cudaMemcpyAsync (queued)");
 }
 

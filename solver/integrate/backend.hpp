@@ -136,8 +136,11 @@ class Backend {
                               bool undoable) = 0;
   virtual void undo_dissipation() = 0;
   virtual void assemble_forces(double dt_dissipation, double mass_damping) = 0;
-  virtual std::vector<ContactShare> contact_shares() = 0;
-  virtual void add_contact_forces(const std::vector<ContactShare>& in) = 0;
+  // The shares as they travel (ContactShare; valid until the next call), and those that
+  // arrived for this rank's vertices. set_share_routes says where they go (a layout's).
+  virtual std::span<const ContactShare> contact_shares() = 0;
+  virtual void add_contact_forces(std::span<const ContactShare> in) = 0;
+  virtual void set_share_routes(const ShareRoutes& routes) = 0;
   // Halo exchange of x and v by index lists, packed where the data lives (on the GPU for
   // CUDA): pack_halo writes 6 doubles (x, v) per entry of send_index, item-major, to `out`
   // in memory space `where`; unpack_halo reads n_recv such records from `in` (in `where`)

@@ -208,11 +208,14 @@ class QdemBackend final : public Backend {
         });
     if (contact_) contact_->evaluate(x_.cview(), v_.cview(), dt_diss);
   }
-  std::vector<ContactShare> contact_shares() override {
-    return contact_ ? contact_->shares(f_.view()) : std::vector<ContactShare>{};
+  std::span<const ContactShare> contact_shares() override {
+    return contact_ ? contact_->shares(f_.view()) : std::span<const ContactShare>{};
   }
-  void add_contact_forces(const std::vector<ContactShare>& in) override {
+  void add_contact_forces(std::span<const ContactShare> in) override {
     if (contact_) contact_->add_forces(f_.view(), in);
+  }
+  void set_share_routes(const ShareRoutes& routes) override {
+    if (contact_) contact_->set_share_routes(routes);
   }
 
   // The contact stage (null when the model needs none), for tests and diagnostics.

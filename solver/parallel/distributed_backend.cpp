@@ -217,9 +217,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
     // The contact stage sums each vertex's own entries while the shares are read and exchanged
     // (on a GPU): these scopes do not synchronise, that work counts at add_contact_forces.
-    std::vector<ContactShare> in;
+    std::vector<std::byte> in;
     if (contact_) {
-      std::vector<ContactShare> out;
+      std::span<const ContactShare> out;
       {
         auto s = tm.launch("elements");
         auto s1 = tm.launch("elements.shares");
@@ -231,7 +231,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
     {
       auto s = tm.scope("elements");
-      local_->add_contact_forces(in);
+      local_->add_contact_forces(
+          {reinterpret_cast<const ContactShare*>(in.data()), in.size() / sizeof(ContactShare)});
     }
     ++exchanges_;
   }
@@ -432,10 +433,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   }
   void undo_dissipation() override { unsupported("undo_dissipation"); }
   void assemble_forces(double, double) override { unsupported("assemble_forces"); }
-  std::vector<ContactShare> contact_shares() override { unsupported("contact_shares"); }
-  void add_contact_forces(const std::vector<ContactShare>&) override {
+  std::span<const ContactShare> contact_shares() override { unsupported("contact_shares"); }
+  void add_contact_forces(std::span<const ContactShare>) override {
     unsupported("add_contact_forces");
   }
+  void set_share_routes(const ShareRoutes&) override { unsupported("set_share_routes"); }
   void set_halo(const std::vector<std::int64_t>&, std::int64_t, std::int64_t) override {
     unsupported("set_halo");
   }
@@ -787,29 +789,49 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   }
 
   // The contact force shares of ghost vertices (this rank evaluated their records) to the
-  // vertices' owners, in global ids on the way; returns the shares other ranks evaluated for
-  // owned vertices, in this rank's ids. Over the halo plan's neighbours: a ghost's owner is one.
-  std::vector<ContactShare> exchange_shares(const std::vector<ContactShare>& out) {
+  // vertices' owners, as the contact stage wrote them (ContactShare: the owner's rank and index
+  // there, global keys); returns the records of those other ranks evaluated for owned vertices,
+  // by source rank. Over the halo plan's neighbours: a ghost's owner is one.
+  std::vector<std::byte> exchange_shares(std::span<const ContactShare> out) {
     std::vector<std::int64_t> off(np_ + 1, 0);
-    for (const ContactShare& s : out) ++off[owner_[L_.vertices[s.vertex]] + 1];
+    for (const ContactShare& s : out) {
+      if (s.rank < 0 || s.rank >= np_ || s.rank == me_)
+        throw std::logic_error("contact share for vertex " + std::to_string(s.vertex) +
+                               " of rank " + std::to_string(s.rank) + " on rank " +
+                               std::to_string(me_));
+      ++off[s.rank + 1];
+    }
     for (int r = 0; r < np_; ++r) off[r + 1] += off[r];
     std::vector<std::int64_t> fill(off.begin(), off.end() - 1);
     std::vector<ContactShare> send(out.size());
-    for (const ContactShare& s : out)
-      send[fill[owner_[L_.vertices[s.vertex]]]++] = ids_.to_global(s);
+    for (const ContactShare& s : out) send[fill[s.rank]++] = s;
     CommEngine& e = halo_->engine();
-    const std::vector<std::byte> got =
+    std::vector<std::byte> in =
         e.exchange(std::as_bytes(std::span(send)), off, sizeof(ContactShare));
     halo_bytes_ += e.last_bytes();
-    std::vector<ContactShare> in(got.size() / sizeof(ContactShare));
-    if (!in.empty()) std::memcpy(in.data(), got.data(), got.size());
-    for (ContactShare& s : in) {
-      s = ids_.to_local(s);
-      if (s.vertex >= L_.n_owned)
-        throw std::logic_error("contact share for vertex " + std::to_string(L_.vertices[s.vertex]) +
-                               ", which rank " + std::to_string(me_) + " does not own");
-    }
     return in;
+  }
+
+  // Where this rank's contact shares go (ShareRoutes), for the layout L just installed (its halo
+  // planned): each free ghost's owner and its index there (which the owner gathers to it: the
+  // owned vertices are its first), and the local model's feature ids.
+  ShareRoutes share_routes(const LocalLayout& L, const FeatureIds& ids) {
+    std::vector<std::uint64_t> index(halo_->n_total());
+    std::iota(index.begin(), index.begin() + L.n_owned, std::uint64_t{0});
+    const CommField f = comm_field(index);
+    halo_->gather_begin({&f, 1});
+    halo_->gather_finish({&f, 1});
+    ShareRoutes r;
+    const std::int64_t n = L.n_free - L.n_owned;
+    r.rank.resize(n);
+    r.index.resize(n);
+    for_each(HostExec{}, n, [&](std::int64_t k) {
+      r.rank[k] = owner_[L.vertices[L.n_owned + k]];
+      r.index[k] = static_cast<std::int32_t>(index[L.n_owned + k]);
+    });
+    r.triangle = ids.triangle;
+    r.edge = ids.edge;
+    return r;
   }
 
   void refresh_ghosts() {
@@ -1453,6 +1475,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     local_->load_state(st);
     if (first_halo) halo_->engine().use_device(local_->space() == Space::Cuda, 6 * sizeof(double));
     local_->set_halo(halo_->engine().send_index(), L.n_owned, halo_->n_ghost());
+    if (contact_) local_->set_share_routes(share_routes(L, lm_.ids));
     local_->mark_positions();
     L_ = std::move(L);
     std::swap(ids_, lm_.ids);  // the old ids' storage serves the next rebuild

@@ -19,8 +19,6 @@ std::int64_t local_of(const std::vector<std::int32_t>& to_local, std::int64_t gi
   return gid >= 0 && gid < static_cast<std::int64_t>(to_local.size()) ? to_local[gid] : -1;
 }
 
-constexpr std::uint64_t kIdMask = (std::uint64_t{1} << 60) - 1;
-
 }  // namespace
 
 ModelIndex index_model(const Model& g) {
@@ -70,19 +68,12 @@ std::int64_t FeatureIds::local_vertex(std::int64_t gid) const {
   return local_of(vertex_local, gid);
 }
 
-// Vertex features are keyed by global id already (ContactTopology::vgid): only edges and
-// triangles, numbered per model, are translated.
 std::uint64_t FeatureIds::k1_to_global(std::uint64_t k1) const {
-  const int type = static_cast<int>(k1 >> 60);
-  if (type != kEdgeEdge) return k1;
-  return contact_key1(type, static_cast<std::uint64_t>(edge[k1 & kIdMask]));
+  return global_key1(k1, edge.data());
 }
 
 std::uint64_t FeatureIds::k2_to_global(std::uint64_t k1, std::uint64_t k2) const {
-  const int type = static_cast<int>(k1 >> 60);
-  if (type == kPointFace) return static_cast<std::uint64_t>(triangle[k2]);
-  if (type == kEdgeEdge) return static_cast<std::uint64_t>(edge[k2]);
-  return k2;  // wall index
+  return global_key2(k1, k2, triangle.data(), edge.data());
 }
 
 std::uint64_t FeatureIds::k1_to_local(std::uint64_t k1) const {
@@ -99,27 +90,6 @@ std::uint64_t FeatureIds::k2_to_local(std::uint64_t k1, std::uint64_t k2) const 
   const std::int64_t l =
       local_of(type == kPointFace ? triangle_local : edge_local, static_cast<std::int64_t>(k2));
   return l < 0 ? kNone : static_cast<std::uint64_t>(l);
-}
-
-ContactShare FeatureIds::to_global(ContactShare s) const {
-  s.k2 = k2_to_global(s.k1, s.k2);
-  s.k1 = k1_to_global(s.k1);
-  s.vertex = vertex[s.vertex];
-  return s;
-}
-
-ContactShare FeatureIds::to_local(ContactShare s) const {
-  const std::uint64_t k1 = k1_to_local(s.k1);
-  const std::uint64_t k2 = k1 == kNone ? kNone : k2_to_local(s.k1, s.k2);
-  const std::int64_t v = local_vertex(s.vertex);
-  if (k2 == kNone || v < 0)
-    throw std::logic_error("contact share of vertex " + std::to_string(s.vertex) +
-                           " names a feature this rank does not hold (key " + std::to_string(s.k1) +
-                           ", " + std::to_string(s.k2) + ")");
-  s.k1 = k1;
-  s.k2 = k2;
-  s.vertex = v;
-  return s;
 }
 
 LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& L,

@@ -66,7 +66,7 @@ class FeatureIds {
  public:
   std::vector<std::int64_t> vertex, triangle, edge;  // local -> global
   // Global -> local, one entry per global vertex, triangle, edge (-1: not held): lookups in
-  // O(1) for a rebuild's history and every step's force shares, written where the lists are.
+  // O(1) for a rebuild's history, written where the lists are.
   std::vector<std::int32_t> vertex_local, triangle_local, edge_local;
   std::uint64_t k1_to_global(std::uint64_t k1) const;
   std::uint64_t k2_to_global(std::uint64_t k1, std::uint64_t k2) const;
@@ -75,10 +75,6 @@ class FeatureIds {
   std::uint64_t k1_to_local(std::uint64_t k1) const;
   std::uint64_t k2_to_local(std::uint64_t k1, std::uint64_t k2) const;
   std::int64_t local_vertex(std::int64_t gid) const;  // -1 when not local
-  // A contact force share's key and vertex in global ids, and back (std::logic_error when
-  // the share names a feature or vertex this model lacks).
-  ContactShare to_global(ContactShare s) const;
-  ContactShare to_local(ContactShare s) const;
 };
 
 struct LocalModel {

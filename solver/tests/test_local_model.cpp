@@ -126,7 +126,8 @@ void two_parts_give_the_whole_models_forces(const std::string& backend, const ch
   const HostFields whole_kicked = pb.backend->download(false);
 
   // Each part evaluates the contacts anchored at its owned vertices; the force shares of the
-  // other part's vertices cross over in global ids, as the distributed backend sends them.
+  // other part's vertices cross over as written (routes: the owner's index, global keys), as
+  // the distributed backend sends them.
   std::vector<LocalLayout> layouts;
   std::vector<LocalModel> parts;
   std::vector<std::unique_ptr<Backend>> backends;
@@ -157,10 +158,20 @@ void two_parts_give_the_whole_models_forces(const std::string& backend, const ch
     EXPECT_GT(send.size(), 0u);
     EXPECT_LT(send.size(), static_cast<std::size_t>(L.n_owned));
     be->set_halo(send, L.n_owned, 0);
+    ShareRoutes routes{{}, {}, lm.ids.triangle, lm.ids.edge};
+    for (std::int64_t i = L.n_owned; i < L.n_free; ++i) {
+      const auto at = std::find(other.vertices.begin(), other.vertices.end(), L.vertices[i]);
+      ASSERT_LT(at - other.vertices.begin(), other.n_owned);  // the other part owns it
+      routes.rank.push_back(1 - side);
+      routes.index.push_back(static_cast<std::int32_t>(at - other.vertices.begin()));
+    }
+    be->set_share_routes(routes);
     be->element_forces(0, lm.model.n_free_tets, 1e-4, false);
     be->assemble_forces(1e-4, g.mass_damping);
-    for (const ContactShare& c : be->contact_shares())
-      crossing[1 - side].push_back(lm.ids.to_global(c));
+    for (const ContactShare& c : be->contact_shares()) {
+      EXPECT_EQ(c.rank, 1 - side);
+      crossing[1 - side].push_back(c);
+    }
     records += static_cast<std::int64_t>(be->contact_stats().at("contacts"));
     const BackendState st = be->save_state();
     for (std::size_t e = 0; e < st.contact->size(); ++e)
@@ -177,9 +188,9 @@ void two_parts_give_the_whole_models_forces(const std::string& backend, const ch
     const LocalLayout& L = layouts[side];
     const LocalModel& lm = parts[side];
     auto& be = backends[side];
-    std::vector<ContactShare> in;
-    for (const ContactShare& c : crossing[side]) in.push_back(lm.ids.to_local(c));
-    be->add_contact_forces(in);
+    // Shares arrive in no fixed order: reversed, a vertex's come against their key order.
+    std::reverse(crossing[side].begin(), crossing[side].end());
+    be->add_contact_forces(crossing[side]);
     const BackendState st = be->save_state();
     const HostFields h = be->download(true);
     const Energies e = be->energies();
