@@ -124,14 +124,14 @@ class Backend {
 
   // ---- Used by distributed runs (parallel/distributed_backend.hpp) -----------------------
   // compute_forces = element_forces(0, n_free_tets) + assemble_forces + add_contact_forces({}):
-  // the element forces of tets [t0, t1) into the corner array, then the gather to vertices,
-  // loads, damping and the contact evaluation, then the contact forces, so that a halo
-  // exchange can overlap the tets whose vertices are all owned and the contact force shares
+  // the element forces of tets [t0, t1) into the corner array, then the contact evaluation
+  // and the gather to vertices, loads and damping, then the contact forces, so that a halo
+  // exchange can overlap the tets whose vertices are all owned, and the contact force shares
   // of other ranks' vertices (contact_shares(), contact_stage.hpp) can reach their owners,
-  // whose add_contact_forces merges them in the one-rank order. `undoable`: the tets'
-  // dissipated energy before this evaluation is kept, and undo_dissipation() restores it (a
-  // distributed rank queues its interior tets before the ranks agree that the layout stays;
-  // a rebuild then discards that evaluation).
+  // whose add_contact_forces merges them in the one-rank order, while the gather runs. `undoable`:
+  // the tets' dissipated energy before this evaluation is kept, and undo_dissipation() restores it
+  // (a distributed rank queues its interior tets before the ranks agree that the layout stays; a
+  // rebuild then discards that evaluation).
   virtual void element_forces(std::int64_t t0, std::int64_t t1, double dt_dissipation,
                               bool undoable) = 0;
   virtual void undo_dissipation() = 0;

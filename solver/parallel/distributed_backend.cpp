@@ -209,14 +209,15 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       local_->unpack_halo(reinterpret_cast<const double*>(in.data()), e.packed_space());
       halo_bytes_ += e.last_bytes();
     }
+    // The element forces' gather (queued after the contact evaluation) and each vertex's own
+    // contact entries run while the shares are read and exchanged (on a GPU): these scopes do
+    // not synchronise, that work counts at add_contact_forces.
     {
-      auto s = tm.scope("elements");
+      auto s = tm.launch("elements");
       local_->element_forces(L_.n_interior, static_cast<std::int64_t>(L_.tets.size()), dt_diss,
                              false);
       local_->assemble_forces(dt_diss, alpha);
     }
-    // The contact stage sums each vertex's own entries while the shares are read and exchanged
-    // (on a GPU): these scopes do not synchronise, that work counts at add_contact_forces.
     std::vector<std::byte> in;
     if (contact_) {
       std::span<const ContactShare> out;
