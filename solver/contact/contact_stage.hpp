@@ -23,9 +23,10 @@
 //     segment sort by record key, then slot) adds it to f in a fixed order (deterministic);
 //     on an MPI rank, which evaluates only the records anchored at its owned vertices
 //     (Evaluator; all those of two bodies when one is whole there and leads, face_leads),
-//     the shares of other ranks' vertices leave by shares() (which sums each
-//     vertex's own entries meanwhile) and arrive at their owners' add_forces, which merges
-//     them with the vertex's own entries by key: the one-rank order;
+//     the shares of other ranks' vertices leave by shares() (keyed in global ids and
+//     addressed to the owner's index: set_share_routes; each vertex's own entries are summed
+//     meanwhile) and arrive at their owners' add_forces, which merges them with the vertex's
+//     own entries by key: the one-rank order;
 //  4. energy: the springs' stored energy and the step's dissipation per contact
 //     (physics/contact_law.hpp, contact_energy; the non-potential force h is history like the
 //     spring), plus, for touches that ended, their spring energy and the second half of their

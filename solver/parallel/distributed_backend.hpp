@@ -23,7 +23,9 @@
 // from their owners by halo exchange, fixed bodies' from the model, which every rank has).
 // Each feature pair is evaluated once, by the owner of its anchor vertex (contact_record.hpp,
 // anchor_slot), which keeps its tangential history; the force shares of vertices other ranks
-// own go to those owners (one variable-length exchange with the halo neighbours per step),
+// own, addressed on the device to the owner's index with global keys (the layout's
+// ShareRoutes), go to those owners (one variable-length exchange with the halo neighbours per
+// step, while the element forces' gather runs on a GPU),
 // which sort them in among their own entries by record key, so every vertex sums its contact
 // forces in the one-rank order. The band is wide enough for the pairs of owned vertices until
 // some vertex has moved `slack` since the last rebuild; then the ghosts are rebuilt (owners
