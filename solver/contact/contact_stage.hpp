@@ -496,8 +496,6 @@ class ContactStage {
   // in f now; add_forces merges the others' with what arrives.
   std::span<const ContactShare> shares(Vec3View f) {
     if (!ghosts_) return {};
-    if (route_rank_.size() != nfree_ - nfv_)
-      throw std::logic_error("contact stage: shares without their routes (set_share_routes)");
     gather_local(f);
     int count = 0;
     if constexpr (S == Space::Cuda) {
@@ -1183,6 +1181,8 @@ class ContactStage {
   // e / 4, in global ids; the owner's rank and index from the routes), into out_; their count
   // into count_, exact even when out_ is too small.
   void compact_shares(std::int64_t ne, View<const std::uint64_t> k1, View<const std::uint64_t> k2) {
+    if (route_rank_.size() != nfree_ - nfv_)
+      throw std::logic_error("contact stage: shares without their routes (set_share_routes)");
     count_.zero();
     const auto evc = ent_v_.cview();
     const auto efc = ent_f_.cview();
