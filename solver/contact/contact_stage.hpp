@@ -283,22 +283,23 @@ struct AppendRecord {
   }
 };
 
-// A vertex's own contact entries (e: record e / 4, slot e % 4, keys in this model's ids) against
-// the shares other ranks sent for it (keys in global ids), in the one-process order: by record
-// key, then slot. `triangle`, `edge`: this model's global ids (ShareRoutes).
-struct ShareOrder {
+// A contact entry (e: record e / 4, slot e % 4; keys k1, k2 in this model's ids) as a share's
+// key: in global ids (`triangle`, `edge`: this model's, ShareRoutes), the slot. What a share
+// carries, and what a vertex's own entries are compared with the shares sent for it.
+struct ShareKeys {
   View<const std::uint64_t> k1, k2;
   View<const std::int64_t> triangle, edge;
-  QDEMSPH_HD bool entry_first(std::int64_t e, const ContactShare& s) const {
-    const std::uint64_t a1 = k1[e / 4], g1 = global_key1(a1, edge.p);
-    if (g1 != s.k1) return g1 < s.k1;
-    const std::uint64_t g2 = global_key2(a1, k2[e / 4], triangle.p, edge.p);
-    if (g2 != s.k2) return g2 < s.k2;
-    return e % 4 < s.slot;
+  QDEMSPH_HD ContactShare operator()(std::int64_t e) const {
+    ContactShare s;
+    s.k1 = global_key1(k1[e / 4], edge.p);
+    s.k2 = global_key2(k1[e / 4], k2[e / 4], triangle.p, edge.p);
+    s.slot = static_cast<std::int32_t>(e % 4);
+    return s;
   }
 };
-static_assert(std::is_trivially_copyable_v<ShareOrder>);
+static_assert(std::is_trivially_copyable_v<ShareKeys>);
 
+// The one-process order of a vertex's contact entries: by record key, then slot.
 QDEMSPH_HD bool share_less(const ContactShare& a, const ContactShare& b) {
   if (a.k1 != b.k1) return a.k1 < b.k1;
   if (a.k2 != b.k2) return a.k2 < b.k2;
@@ -1191,20 +1192,16 @@ class ContactStage {
     int* count = count_.view().p;
     const std::int64_t cap = out_.size();
     const auto rank = route_rank_.cview(), index = route_index_.cview();
-    const std::int64_t* tri = tri_gid_.cview().p;
-    const std::int64_t* edge = edge_gid_.cview().p;
+    const ShareKeys key{k1, k2, tri_gid_.cview(), edge_gid_.cview()};
     for_each(
         Exec{}, ne, QDEMSPH_LAMBDA(std::int64_t e) {
           const int i = evc[e];
           if (i < ev.nfv || !ev.free(i)) return;
           const int k = atomic_inc(count);
           if (k >= cap) return;
-          ContactShare s;
-          s.k1 = global_key1(k1[e / 4], edge);
-          s.k2 = global_key2(k1[e / 4], k2[e / 4], tri, edge);
+          ContactShare s = key(e);
           s.vertex = index[i - ev.nfv];
           s.rank = rank[i - ev.nfv];
-          s.slot = static_cast<std::int32_t>(e % 4);
           s.f = efc[e];
           out[k] = s;
         });
@@ -1249,7 +1246,7 @@ class ContactStage {
     for (std::int64_t j = 0; j < nin; ++j) sorted[j] = in[order[j] & 0xffffffffu];
     if constexpr (S == Space::Cuda)
       if (nin > 0) cuda_copy_queued(in_.view().p, sorted, sizeof(ContactShare) * nin);
-    const ShareOrder ord{pk1_.cview(), pk2_.cview(), tri_gid_.cview(), edge_gid_.cview()};
+    const ShareKeys key{pk1_.cview(), pk2_.cview(), tri_gid_.cview(), edge_gid_.cview()};
     const auto shares = in_.view();
     const auto ef = ent_f_.cview();
     const auto vcnt = vcnt_.cview();
@@ -1281,7 +1278,7 @@ class ContactStage {
           Vec3 s{};
           int a = b;
           for (std::int64_t c = lo; a < e || c < end;) {
-            const bool local = c == end || (a < e && ord.entry_first(vent[a], shares[c]));
+            const bool local = c == end || (a < e && share_less(key(vent[a]), shares[c]));
             s += local ? ef[vent[a++]] : shares[c++].f;
           }
           f.set(i, f[i] + s);
