@@ -13,6 +13,7 @@
 #include <set>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "contact/contact_record.hpp"
@@ -132,6 +133,9 @@ void two_parts_give_the_whole_models_forces(const std::string& backend, const ch
   std::vector<LocalModel> parts;
   std::vector<std::unique_ptr<Backend>> backends;
   std::vector<ContactShare> crossing[2];
+  std::set<std::pair<std::uint64_t, std::uint64_t>> whole_keys;  // the one-process records'
+  for (std::size_t e = 0; e < whole_state.contact->size(); ++e)
+    whole_keys.insert({whole_state.contact->k1[e], whole_state.contact->k2[e]});
   std::int64_t records = 0, led = 0;  // led: point-face records of another part's vertex
   const double band = 0.25;
   for (int side = 0; side < 2; ++side) {
@@ -170,6 +174,7 @@ void two_parts_give_the_whole_models_forces(const std::string& backend, const ch
     be->assemble_forces(1e-4, g.mass_damping);
     for (const ContactShare& c : be->contact_shares()) {
       EXPECT_EQ(c.rank, 1 - side);
+      EXPECT_TRUE(whole_keys.count({c.k1, c.k2})) << "a share keyed as no one-process record";
       crossing[1 - side].push_back(c);
     }
     records += static_cast<std::int64_t>(be->contact_stats().at("contacts"));
