@@ -312,6 +312,13 @@ QDEMSPH_HD bool share_less(const ContactShare& a, const ContactShare& b) {
 // grew every few tens of steps at 1/4 room), and on N ranks every rank's stall stalls them all.
 constexpr std::int64_t count_room(std::int64_t n) { return n + n / 2 + 64; }
 
+// At least n elements in b (a Buffer, or StagingBytes in bytes), grown with count_room's room;
+// the contents are not kept. It grows only: no allocation per step.
+template <class B>
+void fit_count(B& b, std::int64_t n) {
+  if (static_cast<std::int64_t>(b.size()) < n) b.resize(count_room(n));
+}
+
 template <class Exec>
 class ContactStage {
   static constexpr Space S = Exec::space;
@@ -513,7 +520,7 @@ class ContactStage {
     }
     if constexpr (S == Space::Cuda) {
       const std::size_t bytes = sizeof(ContactShare) * n;
-      if (share_read_.size() < bytes) share_read_.resize(sizeof(ContactShare) * count_room(n));
+      fit_count(share_read_, static_cast<std::int64_t>(bytes));
       read_marked(share_read_.data(), out_.cview().p, bytes);
       return {reinterpret_cast<const ContactShare*>(share_read_.data()),
               static_cast<std::size_t>(n)};
@@ -957,7 +964,7 @@ class ContactStage {
       net_.resize(count_room(nc));
       nh_.resize(count_room(nc));
     }
-    if (ediss_.size() < nc) ediss_.resize(count_room(nc));
+    fit_count(ediss_, nc);
     const auto rec = rec_.cview();
     const auto im = inv_mass_.cview();
     const auto bmat = body_mat_.cview();
@@ -1130,7 +1137,7 @@ class ContactStage {
   // follow) into sl_ (merge_shares adds them to f).
   void gather_local(Vec3View f) {
     const std::int64_t ne = 4 * n_prev_;
-    if (vent_.size() < ne) vent_.resize(count_room(ne));  // grows only: no allocation per step
+    fit_count(vent_, ne);
     if (ghosts_ && sl_.size() < nfv_) sl_.resize(nfv_);
     const auto ev = ent_v_.cview();
     const auto ef = ent_f_.cview();
@@ -1236,11 +1243,10 @@ class ContactStage {
       order[m] = static_cast<std::uint64_t>(c.vertex) << 32 | static_cast<std::uint64_t>(m);
     }
     std::sort(order.begin(), order.end());
-    if (in_.size() < nin) in_.resize(count_room(nin));  // grows only: no allocation per step
+    fit_count(in_, nin);
     ContactShare* sorted = in_.view().p;
     if constexpr (S == Space::Cuda) {
-      if (share_write_.size() < sizeof(ContactShare) * nin)
-        share_write_.resize(sizeof(ContactShare) * count_room(nin));
+      fit_count(share_write_, static_cast<std::int64_t>(sizeof(ContactShare)) * nin);
       sorted = reinterpret_cast<ContactShare*>(share_write_.data());
     }
     for (std::int64_t j = 0; j < nin; ++j) sorted[j] = in[order[j] & 0xffffffffu];
@@ -1301,8 +1307,8 @@ class ContactStage {
   // Drops the records another rank evaluates (a fixed vertex's point-face hits: tested wherever
   // both sides are held, so that the duplicate filter sees them all); the key order stays.
   std::int64_t keep_evaluated(std::int64_t nc) {
-    if (keep_.size() < nc + 1) keep_.resize(count_room(nc));
-    if (rec_tmp_.size() < nc) rec_tmp_.resize(count_room(nc));
+    fit_count(keep_, nc + 1);
+    fit_count(rec_tmp_, nc);
     const auto rec = rec_.cview();
     const auto keep = keep_.view();
     const Evaluator ev = evaluator();
