@@ -859,6 +859,9 @@ class ContactStage {
   // of touches that ended needs them).
   std::int64_t narrow_phase(Vec3CView x) {
     std::swap(rec_, prec_);
+    // Room for a quarter more records than the last step's: a count that grows reallocates here
+    // rather than through the pass's second run below.
+    fit_count(rec_, n_prev_ + n_prev_ / 4);
     {
       const std::int64_t ntri = ntri_;
       const auto tv = tri_v_.cview();

@@ -34,6 +34,8 @@ void DeviceMark::wait() {}
 CudaIpcHandle cuda_ipc_handle(void*) { no_cuda(); }
 void* cuda_ipc_open(const CudaIpcHandle&) { no_cuda(); }
 void cuda_ipc_close(void*) noexcept {}
+void* cuda_ipc_alloc(std::size_t) { no_cuda(); }
+void cuda_ipc_free(void*) noexcept {}
 void* staging_alloc(std::size_t bytes, bool* pinned) {
   *pinned = false;
   void* p = std::malloc(bytes > 0 ? bytes : 1);

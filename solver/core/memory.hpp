@@ -61,15 +61,20 @@ class DeviceMark {
   void* event_ = nullptr;
   bool pending_ = false;
 };
-// CUDA IPC between processes of one node: the handle of a device allocation of this process
-// (a pointer cuda_alloc returned), and another process's allocation mapped into this one by
-// its handle (a device pointer here; peer copies from it go over NVLink where there is one).
+// CUDA IPC between processes of one node: the handle of this process's IpcDeviceBytes, and
+// another process's mapped into this one by its handle (a device pointer here; peer copies
+// from it go over NVLink where there is one).
 struct CudaIpcHandle {
   unsigned char bytes[64];
 };
 CudaIpcHandle cuda_ipc_handle(void* p);
 void* cuda_ipc_open(const CudaIpcHandle& h);
 void cuda_ipc_close(void* p) noexcept;
+// Device memory an IPC handle can name: a plain cudaMalloc allocation (Buffer's device memory
+// comes from the stream-ordered pool, which cudaIpcGetMemHandle does not accept). Freeing it
+// waits for the device.
+void* cuda_ipc_alloc(std::size_t bytes);
+void cuda_ipc_free(void* p) noexcept;
 // Host memory for staging (StagingBytes): page-locked once this process has allocated GPU
 // memory, plain heap memory before (a CPU run never makes a GPU context); *pinned says which.
 void* staging_alloc(std::size_t bytes, bool* pinned);
@@ -104,11 +109,12 @@ class BufferRoom {
 };
 
 // The allocation grows only: a resize or assign to a size within the capacity keeps it (no
-// free and allocate; on CUDA no cudaFree, which would wait for the device), so rebuilding a
-// model of about the same size reuses its memory, and view() keeps its pointer until a size
-// beyond the capacity. A buffer outgrowing an earlier allocation takes 1/8 more room, so a size
-// creeping up reallocates rarely (its first allocation too under a BufferRoom). Only the
-// destructor (or moving another buffer in) frees.
+// free and allocate), so rebuilding a model of about the same size reuses its memory, and
+// view() keeps its pointer until a size beyond the capacity. Device memory comes from the
+// device's stream-ordered pool (memory_cuda.cu): a reallocation neither waits for the device nor
+// maps fresh pages where earlier frees left room. A buffer outgrowing an earlier allocation takes
+// 1/8 more room, so a size creeping up reallocates rarely (its first allocation too under a
+// BufferRoom). Only the destructor (or moving another buffer in) frees.
 template <class T>
 class Buffer {
   static_assert(std::is_trivially_copyable_v<T>);
@@ -268,6 +274,33 @@ class StagingBytes {
   std::byte* p_ = nullptr;
   std::size_t size_ = 0, cap_ = 0;
   bool pinned_ = false;
+};
+
+// Grow-only device bytes that other processes of the node map by cuda_ipc_handle (a halo's
+// send buffer, CommEngine); contents are not kept across a growth.
+class IpcDeviceBytes {
+ public:
+  IpcDeviceBytes() = default;
+  ~IpcDeviceBytes() { cuda_ipc_free(p_); }
+  IpcDeviceBytes(const IpcDeviceBytes&) = delete;
+  IpcDeviceBytes& operator=(const IpcDeviceBytes&) = delete;
+  void reserve(std::size_t n) {  // a growth takes 1/8 more room, as Buffer's does
+    if (n <= cap_) return;
+    const std::size_t want = cap_ > 0 ? n + n / 8 : n;
+    release();
+    p_ = static_cast<std::byte*>(cuda_ipc_alloc(want));
+    cap_ = want;
+  }
+  void release() noexcept {
+    cuda_ipc_free(p_);
+    p_ = nullptr, cap_ = 0;
+  }
+  std::byte* data() const { return p_; }
+  std::size_t capacity() const { return cap_; }
+
+ private:
+  std::byte* p_ = nullptr;
+  std::size_t cap_ = 0;
 };
 
 // A buffer's n elements computed on the host (a model's upload): write(out) stores them into

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -92,28 +93,80 @@ void staging_free(void* p, bool pinned) noexcept {
     std::free(p);
 }
 
-void* cuda_alloc(std::size_t bytes) {
+namespace {
+
+// The device's default memory pool, keeping what is freed (release threshold: all of it): a
+// Buffer that grows frees and allocates on the default stream, in order with the kernels, so
+// neither waits for the device, and the pool hands the freed room out again. cudaFree and
+// cudaMalloc waited and mapped afresh: 4-8 ms for the ~18 contact arrays that grow with the
+// contact count, a stall every rank waited for (references/benchmarks/scaling/
+// 2026-11-27_x4_gather_behind_shares/).
+cudaMemPool_t device_pool() {
+  static const cudaMemPool_t pool = [] {
+    use_preferred_device();
+    int dev = 0;
+    QDEMSPH_CUDA_CHECK(cudaGetDevice(&dev), "cudaGetDevice");
+    cudaMemPool_t p = nullptr;
+    QDEMSPH_CUDA_CHECK(cudaDeviceGetDefaultMemPool(&p, dev), "cudaDeviceGetDefaultMemPool");
+    std::uint64_t keep = UINT64_MAX;
+    QDEMSPH_CUDA_CHECK(cudaMemPoolSetAttribute(p, cudaMemPoolAttrReleaseThreshold, &keep),
+                       "cudaMemPoolSetAttribute");
+    return p;
+  }();
+  return pool;
+}
+
+[[noreturn]] void out_of_memory(std::size_t bytes) {
+  cudaGetLastError();
+  std::size_t free_b = 0, total_b = 0;
+  cudaMemGetInfo(&free_b, &total_b);
+  throw InputError("the problem does not fit on the GPU: allocating " + mib(bytes) +
+                   " failed with " + mib(free_b) + " free of " + mib(total_b) +
+                   " (use a coarser mesh or more GPUs)");
+}
+
+void need_gpu() {
   if (!cuda_available())
     throw InputError(
         "the CUDA backend needs a GPU, and this machine has none visible "
         "(check nvidia-smi and CUDA_VISIBLE_DEVICES)");
-  use_preferred_device();
+}
+
+}  // namespace
+
+void* cuda_alloc(std::size_t bytes) {
+  need_gpu();
+  device_pool();
   void* p = nullptr;
-  const cudaError_t e = cudaMalloc(&p, bytes);
-  if (e == cudaErrorMemoryAllocation) {
-    cudaGetLastError();
-    std::size_t free_b = 0, total_b = 0;
-    cudaMemGetInfo(&free_b, &total_b);
-    throw InputError("the problem does not fit on the GPU: allocating " + mib(bytes) +
-                     " failed with " + mib(free_b) + " free of " + mib(total_b) +
-                     " (use a coarser mesh or more GPUs)");
-  }
-  QDEMSPH_CUDA_CHECK(e, "cudaMalloc");
+  const cudaError_t e = cudaMallocAsync(&p, bytes, cudaStreamLegacy);
+  if (e == cudaErrorMemoryAllocation) out_of_memory(bytes);
+  QDEMSPH_CUDA_CHECK(e, "cudaMallocAsync");
   g_device_used = true;
   return p;
 }
 
 void cuda_free(void* p) noexcept {
+  if (p) cudaFreeAsync(p, cudaStreamLegacy);  // errors at teardown (driver unloaded) are ignored
+}
+
+void* cuda_ipc_alloc(std::size_t bytes) {
+  need_gpu();
+  use_preferred_device();
+  void* p = nullptr;
+  cudaError_t e = cudaMalloc(&p, bytes);
+  if (e == cudaErrorMemoryAllocation) {  // the pool may hold the room: give it back, once
+    cudaGetLastError();
+    QDEMSPH_CUDA_CHECK(cudaDeviceSynchronize(), "cudaDeviceSynchronize");
+    QDEMSPH_CUDA_CHECK(cudaMemPoolTrimTo(device_pool(), 0), "cudaMemPoolTrimTo");
+    e = cudaMalloc(&p, bytes);
+  }
+  if (e == cudaErrorMemoryAllocation) out_of_memory(bytes);
+  QDEMSPH_CUDA_CHECK(e, "cudaMalloc");
+  g_device_used = true;
+  return p;
+}
+
+void cuda_ipc_free(void* p) noexcept {
   if (p) cudaFree(p);  // errors at teardown (driver already unloaded) are ignored
 }
 
@@ -343,7 +396,7 @@ struct TempStorage {
 void* cuda_temp_storage(std::size_t bytes) {
   static TempStorage s;
   if (bytes > s.bytes) {
-    cuda_free(s.p);  // cudaFree waits for the device: no kernel still uses the old storage
+    cuda_free(s.p);  // in stream order: kernels queued before still have the old storage
     s.p = nullptr;
     s.bytes = 0;
     const std::size_t want = bytes + bytes / 2 + 4096;

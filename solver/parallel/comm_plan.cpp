@@ -158,9 +158,9 @@ bool CommEngine::map_peers() {
   };
   std::vector<Where> out(size_), in(size_);
   try {
-    dsend_.resize(static_cast<std::int64_t>(std::max<std::size_t>(1, max_stride_ * n_send())));
-    drecv_.resize(static_cast<std::int64_t>(std::max<std::size_t>(1, max_stride_ * n_recv())));
-    const CudaIpcHandle h = cuda_ipc_handle(dsend_.view().p);
+    dsend_.reserve(std::max<std::size_t>(1, max_stride_ * n_send()));
+    drecv_.reserve(std::max<std::size_t>(1, max_stride_ * n_recv()));
+    const CudaIpcHandle h = cuda_ipc_handle(dsend_.data());
     std::vector<MPI_Request> req;
     for (int r : nbrs_) {
       if (recv_off_[r + 1] > recv_off_[r]) {
@@ -193,8 +193,8 @@ void CommEngine::unmap_peers() {
 
 void CommEngine::drop_device() {
   unmap_peers();
-  dsend_ = Buffer<std::byte>(Space::Cuda);
-  drecv_ = Buffer<std::byte>(Space::Cuda);
+  dsend_.release();
+  drecv_.release();
   device_ = false;
 }
 
@@ -202,7 +202,7 @@ void CommEngine::drop_device() {
 // grow (a new allocation: every rank drops its mappings first, so none outlives its buffer);
 // host staging again when a neighbour is off this node now.
 void CommEngine::remap_device() {
-  const bool grow = max_stride_ * n_send() > static_cast<std::size_t>(dsend_.capacity());
+  const bool grow = max_stride_ * n_send() > dsend_.capacity();
   if (!all_ranks(neighbours_on_node())) return drop_device();
   if (!all_ranks(!grow)) unmap_peers();
   if (!all_ranks(map_peers())) drop_device();
@@ -246,7 +246,7 @@ std::span<const std::byte> CommEngine::finish_device() {
   const double t0 = MPI_Wtime();
   MPI_Waitall(static_cast<int>(ready_.size()), ready_.data(), MPI_STATUSES_IGNORE);
   // On the copy stream: the kernels the caller queued meanwhile (the interior tets) run on.
-  std::byte* const recv = drecv_.view().p;
+  std::byte* const recv = drecv_.data();
   for (int r : nbrs_) {
     const std::int64_t n = recv_off_[r + 1] - recv_off_[r];
     if (n > 0)
@@ -255,7 +255,7 @@ std::span<const std::byte> CommEngine::finish_device() {
   }
   const std::int64_t nself = send_off_[rank_ + 1] - send_off_[rank_];
   if (nself > 0)
-    cuda_copy_async(recv + recv_off_[rank_] * stride_, dsend_.view().p + send_off_[rank_] * stride_,
+    cuda_copy_async(recv + recv_off_[rank_] * stride_, dsend_.data() + send_off_[rank_] * stride_,
                     nself * stride_);
   cuda_copy_wait();
   for (int r : nbrs_)
@@ -368,7 +368,7 @@ std::span<std::byte> CommEngine::packed_send_buffer(std::size_t stride) {
     if (stride > max_stride_)
       throw std::logic_error("comm plan: records of " + std::to_string(stride) +
                              " bytes, the device buffers hold " + std::to_string(max_stride_));
-    return {dsend_.view().p, n};
+    return {dsend_.data(), n};
   }
   sendbuf_.resize(n);
   return {sendbuf_.data(), sendbuf_.size()};

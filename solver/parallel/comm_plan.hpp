@@ -210,7 +210,7 @@ class CommEngine {
   bool device_ = false, marked_ = false;  // marked_: mark_packed() since the last post
   DeviceMark packed_;
   std::size_t max_stride_ = 0;
-  Buffer<std::byte> dsend_{Space::Cuda}, drecv_{Space::Cuda};
+  IpcDeviceBytes dsend_, drecv_;
   std::vector<std::byte*> peer_;
   std::vector<std::int64_t> peer_off_;
   std::vector<MPI_Request> ready_;  // "packed" from the senders to this rank

@@ -1,6 +1,6 @@
 // Buffers keep their allocation within its capacity; indexed copies within a memory space
 // (core/memory.hpp): known answers on the host, the same on a device (skipped without a GPU);
-// staging bytes; the GPU of each rank.
+// staging bytes; the device pool and IPC bytes; the GPU of each rank.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -52,6 +52,37 @@ TEST(Memory, BuffersKeepTheirAllocationWithinTheCapacity) { check_capacity(Space
 TEST(Memory, DeviceBuffersKeepTheirAllocationWithinTheCapacity) {
   if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
   check_capacity(Space::Cuda);
+}
+
+// Device buffers come from the stream-ordered pool (memory_cuda.cu): a buffer freed and one of
+// the same size allocated next get the same room, with no wait for the device between, and its
+// earlier contents were copied out in stream order before. CUDA IPC cannot name pool memory, so
+// a halo's send buffer is IpcDeviceBytes, which it can.
+TEST(Memory, DeviceBuffersReuseFreedRoomAndIpcBytesAreShareable) {
+  if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
+  const std::vector<double> v(1 << 20, 2.5);
+  const double* p = nullptr;
+  {
+    Buffer<double> a(Space::Cuda);
+    a.assign(v);
+    p = a.cview().p;
+    EXPECT_EQ(a.to_host(), v);
+  }
+  Buffer<double> b(Space::Cuda, static_cast<std::int64_t>(v.size()));
+  EXPECT_EQ(b.cview().p, p);
+  EXPECT_EQ(b.to_host(), std::vector<double>(v.size(), 0.0));  // zero-filled after the free
+  EXPECT_THROW(cuda_ipc_handle(b.view().p), std::runtime_error);
+  IpcDeviceBytes s;
+  s.reserve(100);
+  EXPECT_EQ(s.capacity(), 100u);
+  const std::byte* q = s.data();
+  s.reserve(64);  // within the capacity: the same allocation
+  EXPECT_EQ(s.data(), q);
+  s.reserve(200);  // a growth takes 1/8 more room
+  EXPECT_EQ(s.capacity(), 225u);
+  EXPECT_NO_THROW(cuda_ipc_handle(s.data()));
+  s.release();
+  EXPECT_EQ(s.data(), nullptr);
 }
 
 // gather then scatter of doubles and bytes through buffers of space s; returns the results.
