@@ -33,6 +33,7 @@ std::string mib(std::size_t b) {
 }  // namespace
 
 void cuda_fail(cudaError_t e, const char* what, const char* file, int line) {
+  cudaGetLastError();  // reported here: not again by the next launch's check (a sticky error stays)
   std::string msg = std::string("CUDA error in ") + what + " (" + file + ":" +
                     std::to_string(line) + "): " + cudaGetErrorName(e) + ": " +
                     cudaGetErrorString(e);
