@@ -57,6 +57,7 @@
 #include "core/error_flag.hpp"
 #include "core/exec_host.hpp"
 #include "core/memory.hpp"
+#include "core/radix_sort.hpp"
 #include "core/timers.hpp"
 #include "model/model.hpp"
 #include "neighbor/cell_grid.hpp"
@@ -306,6 +307,20 @@ QDEMSPH_HD bool share_less(const ContactShare& a, const ContactShare& b) {
   return a.slot < b.slot;
 }
 
+// Of the shares [lo, end) (a vertex's few, distinct in that order), the one after shares[prev]
+// in share_less order (the first for prev < 0); -1 after the last. Nothing moves: the threads
+// that find a vertex's run only read it.
+template <class Shares>
+QDEMSPH_HD std::int64_t next_share(const Shares& shares, std::int64_t lo, std::int64_t end,
+                                   std::int64_t prev) {
+  std::int64_t best = -1;
+  for (std::int64_t c = lo; c < end; ++c)
+    if ((prev < 0 || share_less(shares[prev], shares[c])) &&
+        (best < 0 || share_less(shares[c], shares[best])))
+      best = c;
+  return best;
+}
+
 // Room for n elements in an array that follows a count growing over a run (records, entries,
 // shares): half as much again, so that the count's growth reallocates it a few times a run.
 // On a GPU each reallocation stalls the step (~0.25 ms an array; the cube block's ~18 arrays
@@ -547,18 +562,14 @@ class ContactStage {
   }
 
   // The owned vertices other ranks may send shares for: those they hold (an MPI rank's halo
-  // sends them; duplicates and ghosts ignored). Their contact sums wait for the shares
-  // (merge_shares); every other vertex's goes into f as on one process. upload() makes every
-  // owned vertex a target.
+  // sends them; duplicates and ghosts ignored). gather_local keeps their force without contact
+  // (base_), so that merge_shares can sum a vertex's entries and shares in the one-process
+  // order. upload() makes every owned vertex a target.
   void set_share_targets(const std::vector<std::int64_t>& held_elsewhere) {
     std::vector<std::uint8_t> flag(nfv_, 0);
     for (const std::int64_t i : held_elsewhere)
       if (i >= 0 && i < nfv_) flag[i] = 1;
-    std::vector<std::int32_t> list;
-    for (std::int64_t i = 0; i < nfv_; ++i)
-      if (flag[i]) list.push_back(static_cast<std::int32_t>(i));
     share_flag_.assign(flag);
-    share_v_.assign(list);
     share_host_ = std::move(flag);
   }
 
@@ -690,9 +701,9 @@ class ContactStage {
            pen_.bytes() + pet_.bytes() + nen_.bytes() + net_.bytes() + ediss_.bytes() +
            ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() + pr_ref_.bytes() +
            cells_.bytes() + pairs_.bytes() + vgid_.bytes() + edge_anchor_.bytes() +
-           rec_tmp_.bytes() + in_.bytes() + sl_.bytes() + share_flag_.bytes() + share_v_.bytes() +
-           out_.bytes() + keep_.bytes() + route_rank_.bytes() + route_index_.bytes() +
-           tri_gid_.bytes() + edge_gid_.bytes();
+           rec_tmp_.bytes() + in_.bytes() + base_.bytes() + share_flag_.bytes() + out_.bytes() +
+           keep_.bytes() + route_rank_.bytes() + route_index_.bytes() + tri_gid_.bytes() +
+           edge_gid_.bytes();
   }
 
   ContactTopology topology() const {
@@ -1136,18 +1147,18 @@ class ContactStage {
   }
 
   // Each vertex's entries of the last evaluation sorted by record key, then slot (count, scan,
-  // fill, sort) and summed into f; on an MPI rank a share target's (other ranks' shares may
-  // follow) into sl_ (merge_shares adds them to f).
+  // fill, sort) and summed into f; on an MPI rank a share target's force before that sum is
+  // kept in base_ (other ranks' shares may follow: merge_shares).
   void gather_local(Vec3View f) {
     const std::int64_t ne = 4 * n_prev_;
     fit_count(vent_, ne);
-    if (ghosts_ && sl_.size() < nfv_) sl_.resize(nfv_);
+    if (ghosts_ && base_.size() < nfv_) base_.resize(nfv_);
     const auto ev = ent_v_.cview();
     const auto ef = ent_f_.cview();
     const auto vcnt = vcnt_.view();
     const auto vcur = vcur_.view();
     const auto vent = vent_.view();
-    const auto sl = sl_.view();
+    const auto base = base_.view();
     const auto target = share_flag_.cview();
     const bool ghosts = ghosts_;
     vcnt_.zero();  // memset: no parallel region for a loop without work
@@ -1168,6 +1179,7 @@ class ContactStage {
     for_each(
         Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
           const int b = vcnt[i], e = vcnt[i + 1];
+          if (ghosts && target[i]) base.set(i, f[i]);
           if (b == e) return;
           for (int k = b + 1; k < e; ++k) {
             const int val = vent[k];
@@ -1180,10 +1192,7 @@ class ContactStage {
           }
           Vec3 s{};
           for (int k = b; k < e; ++k) s += ef[vent[k]];
-          if (ghosts && target[i])
-            sl.set(i, s);
-          else
-            f.set(i, f[i] + s);
+          f.set(i, f[i] + s);
         });
     local_sorted_ = true;
   }
@@ -1230,67 +1239,55 @@ class ContactStage {
     }
   }
 
-  // f[i] += the contact force on each share target: gather_local's sum, or, for a vertex that
-  // other ranks sent shares for, its entries and those shares merged in key order and summed
-  // (the one-rank order). The host orders the shares by vertex (64-bit keys: vertex, arrival)
-  // and queues their copy; each vertex's few are sorted by key on the device, where its
-  // entries are.
+  // Each vertex that other ranks sent shares for: f = its force before contact (base_) + its
+  // entries and those shares merged in key order and summed (the one-rank order); every other
+  // vertex has its sum from gather_local. The host orders the shares by vertex (a radix sort of
+  // the vertex ids, stable: arrival order within a vertex) and queues their copy; on the device
+  // a thread a vertex takes its few shares in key order where its entries are.
   void merge_shares(Vec3View f, std::span<const ContactShare> in) {
     const auto nin = static_cast<std::int64_t>(in.size());
-    std::vector<std::uint64_t> order(nin);
+    order_.resize(static_cast<std::size_t>(nin));
     for (std::int64_t m = 0; m < nin; ++m) {
       const ContactShare& c = in[m];
       if (c.vertex < 0 || c.vertex >= nfv_ || !share_host_[c.vertex])
         throw std::logic_error("contact share for vertex " + std::to_string(c.vertex) +
                                ", which is not a share target of this rank");
-      order[m] = static_cast<std::uint64_t>(c.vertex) << 32 | static_cast<std::uint64_t>(m);
+      order_[m] = {static_cast<std::uint64_t>(c.vertex), static_cast<std::int32_t>(m)};
     }
-    std::sort(order.begin(), order.end());
+    radix_sort(order_, order_tmp_, 32);  // vertex ids < 2^31
     fit_count(in_, nin);
     ContactShare* sorted = in_.view().p;
     if constexpr (S == Space::Cuda) {
       fit_count(share_write_, static_cast<std::int64_t>(sizeof(ContactShare)) * nin);
       sorted = reinterpret_cast<ContactShare*>(share_write_.data());
     }
-    for (std::int64_t j = 0; j < nin; ++j) sorted[j] = in[order[j] & 0xffffffffu];
+    for (std::int64_t j = 0; j < nin; ++j) sorted[j] = in[order_[j].second];
     if constexpr (S == Space::Cuda)
       if (nin > 0) cuda_copy_queued(in_.view().p, sorted, sizeof(ContactShare) * nin);
     const ShareKeys key{pk1_.cview(), pk2_.cview(), tri_gid_.cview(), edge_gid_.cview()};
-    const auto shares = in_.view();
+    const auto shares = in_.cview();
     const auto ef = ent_f_.cview();
     const auto vcnt = vcnt_.cview();
     const auto vent = vent_.cview();
-    const auto sl = sl_.cview();
-    const auto targets = share_v_.cview();
+    const auto base = base_.cview();
     for_each(
-        Exec{}, share_v_.size(), QDEMSPH_LAMBDA(std::int64_t k) {
-          const std::int64_t i = targets[k];
-          // This vertex's shares: [lo, end) of those ordered by vertex, sorted by key here.
-          const std::int64_t lo =
-              lower_bound_index(nin, [&](std::int64_t m) { return shares[m].vertex < i; });
-          std::int64_t end = lo;
+        Exec{}, nin, QDEMSPH_LAMBDA(std::int64_t lo) {
+          const int i = shares[lo].vertex;
+          if (lo > 0 && shares[lo - 1].vertex == i) return;  // the thread of its first share
+          std::int64_t end = lo + 1;
           while (end < nin && shares[end].vertex == i) ++end;
           const int b = vcnt[i], e = vcnt[i + 1];
-          if (lo == end) {
-            if (b < e) f.set(i, f[i] + sl[i]);
-            return;
-          }
-          for (std::int64_t c = lo + 1; c < end; ++c) {
-            const ContactShare val = shares[c];
-            std::int64_t j = c - 1;
-            while (j >= lo && share_less(val, shares[j])) {
-              shares[j + 1] = shares[j];
-              --j;
-            }
-            shares[j + 1] = val;
-          }
           Vec3 s{};
           int a = b;
-          for (std::int64_t c = lo; a < e || c < end;) {
-            const bool local = c == end || (a < e && share_less(key(vent[a]), shares[c]));
-            s += local ? ef[vent[a++]] : shares[c++].f;
+          for (std::int64_t c = next_share(shares, lo, end, -1); a < e || c >= 0;) {
+            if (c < 0 || (a < e && share_less(key(vent[a]), shares[c]))) {
+              s += ef[vent[a++]];
+            } else {
+              s += shares[c].f;
+              c = next_share(shares, lo, end, c);
+            }
           }
-          f.set(i, f[i] + s);
+          f.set(i, base[i] + s);
         });
   }
 
@@ -1360,9 +1357,9 @@ class ContactStage {
   StagingBytes share_read_, share_write_;  // a GPU's shares on the host: out_'s, in_'s
   Buffer<std::int32_t> route_rank_{S}, route_index_{S};  // ShareRoutes (set_share_routes)
   Buffer<std::int64_t> tri_gid_{S}, edge_gid_{S};
-  Vec3Buffer sl_{S};                      // an MPI rank's local contact force sums (gather_local)
-  Buffer<std::uint8_t> share_flag_{S};    // per owned vertex: a share target (set_share_targets)
-  Buffer<std::int32_t> share_v_{S};       // the share targets, increasing
+  Vec3Buffer base_{S};  // an MPI rank's share targets' force before contact (gather_local)
+  Buffer<std::uint8_t> share_flag_{S};  // per owned vertex: a share target (set_share_targets)
+  std::vector<std::pair<std::uint64_t, std::int32_t>> order_, order_tmp_;  // merge_shares' sort
   std::vector<std::uint8_t> share_host_;  // share_flag_ on the host (merge_shares checks)
   bool local_sorted_ = false;             // gather_local ran for the last evaluation
   DeviceMark shares_mark_;                // after the shares' compaction (shares, read_marked)
