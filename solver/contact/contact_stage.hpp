@@ -57,7 +57,6 @@
 #include "core/error_flag.hpp"
 #include "core/exec_host.hpp"
 #include "core/memory.hpp"
-#include "core/radix_sort.hpp"
 #include "core/timers.hpp"
 #include "model/model.hpp"
 #include "neighbor/cell_grid.hpp"
@@ -513,13 +512,13 @@ class ContactStage {
   // The last evaluation's force shares of free vertices held but not owned (an MPI rank's
   // ghosts; none on one process), as they travel (ContactShare: the owner's rank and index,
   // global keys), in no fixed order; valid until the next call. The force law compacted them
-  // and queued their count's copy (queue_shares). Meanwhile each vertex's own entries are
-  // sorted and summed (gather_local): on a GPU that runs while the host reads the shares (into
-  // page-locked memory) and the ranks exchange them. A vertex no other rank holds gets its sum
-  // in f now; add_forces merges the others' with what arrives.
+  // and queued their count's copy (queue_shares). Once the host has read them (into page-locked
+  // memory, while the device runs the element gather queued before), each vertex's own entries
+  // are sorted and summed (gather_local): on a GPU that runs while the ranks exchange the
+  // shares. A vertex no other rank holds gets its sum in f now; add_forces merges the others'
+  // with what arrives.
   std::span<const ContactShare> shares(Vec3View f) {
     if (!ghosts_) return {};
-    gather_local(f);
     int count = 0;
     if constexpr (S == Space::Cuda) {
       shares_mark_.wait();
@@ -537,11 +536,13 @@ class ContactStage {
       const std::size_t bytes = sizeof(ContactShare) * n;
       fit_count(share_read_, static_cast<std::int64_t>(bytes));
       read_marked(share_read_.data(), out_.cview().p, bytes);
+    }
+    gather_local(f);
+    if constexpr (S == Space::Cuda)
       return {reinterpret_cast<const ContactShare*>(share_read_.data()),
               static_cast<std::size_t>(n)};
-    } else {
+    else
       return {out_.cview().p, static_cast<std::size_t>(n)};
-    }
   }
 
   // f[i] += contact force on vertex i, for free vertices i < n_free_vertices, of the last
@@ -571,6 +572,7 @@ class ContactStage {
       if (i >= 0 && i < nfv_) flag[i] = 1;
     share_flag_.assign(flag);
     share_host_ = std::move(flag);
+    share_head_.assign(static_cast<std::size_t>(nfv_), -1);
   }
 
   // Where this rank's shares go (ShareRoutes, from its layout): the owners of the free vertices
@@ -701,9 +703,9 @@ class ContactStage {
            pen_.bytes() + pet_.bytes() + nen_.bytes() + net_.bytes() + ediss_.bytes() +
            ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() + pr_ref_.bytes() +
            cells_.bytes() + pairs_.bytes() + vgid_.bytes() + edge_anchor_.bytes() +
-           rec_tmp_.bytes() + in_.bytes() + base_.bytes() + share_flag_.bytes() + out_.bytes() +
-           keep_.bytes() + route_rank_.bytes() + route_index_.bytes() + tri_gid_.bytes() +
-           edge_gid_.bytes();
+           rec_tmp_.bytes() + in_.bytes() + base_.bytes() + ekey_.bytes() + share_flag_.bytes() +
+           out_.bytes() + keep_.bytes() + route_rank_.bytes() + route_index_.bytes() +
+           tri_gid_.bytes() + edge_gid_.bytes();
   }
 
   ContactTopology topology() const {
@@ -1194,6 +1196,20 @@ class ContactStage {
           for (int k = b; k < e; ++k) s += ef[vent[k]];
           f.set(i, f[i] + s);
         });
+    // A share target's entries' keys in global ids, which merge_shares compares with the shares:
+    // a thread an entry here, where each vertex's merge had waited for a chain of dependent
+    // loads a key (that kernel: 39 us of a 4-GPU step on an H200, on the step's critical path).
+    if (ghosts) {
+      fit_count(ekey_, ne);
+      const auto ekey = ekey_.view();
+      const ShareKeys key{pk1_.cview(), pk2_.cview(), tri_gid_.cview(), edge_gid_.cview()};
+      const std::int64_t nfv = nfv_;
+      for_each(
+          Exec{}, ne, QDEMSPH_LAMBDA(std::int64_t e) {
+            const int i = ev[e];
+            if (i >= 0 && i < nfv && target[i]) ekey[e] = key(e);
+          });
+    }
     local_sorted_ = true;
   }
 
@@ -1241,35 +1257,42 @@ class ContactStage {
 
   // Each vertex that other ranks sent shares for: f = its force before contact (base_) + its
   // entries and those shares merged in key order and summed (the one-rank order); every other
-  // vertex has its sum from gather_local. The host orders the shares by vertex (a radix sort of
-  // the vertex ids, stable: arrival order within a vertex) and queues their copy; on the device
-  // a thread a vertex takes its few shares in key order where its entries are.
+  // vertex has its sum from gather_local. The host groups the shares by vertex (linked through
+  // share_head_, O(n): no sort) and queues their copy; on the device a thread a vertex takes its
+  // few shares in key order and compares them with its entries' keys (gather_local's ekey_).
   void merge_shares(Vec3View f, std::span<const ContactShare> in) {
     const auto nin = static_cast<std::int64_t>(in.size());
-    order_.resize(static_cast<std::size_t>(nin));
-    for (std::int64_t m = 0; m < nin; ++m) {
-      const ContactShare& c = in[m];
+    for (const ContactShare& c : in)
       if (c.vertex < 0 || c.vertex >= nfv_ || !share_host_[c.vertex])
         throw std::logic_error("contact share for vertex " + std::to_string(c.vertex) +
                                ", which is not a share target of this rank");
-      order_[m] = {static_cast<std::uint64_t>(c.vertex), static_cast<std::int32_t>(m)};
+    share_next_.resize(static_cast<std::size_t>(nin));
+    share_first_.clear();
+    for (std::int64_t m = 0; m < nin; ++m) {
+      std::int32_t& h = share_head_[in[m].vertex];
+      if (h < 0) share_first_.push_back(static_cast<std::int32_t>(in[m].vertex));
+      share_next_[m] = h;
+      h = static_cast<std::int32_t>(m);
     }
-    radix_sort(order_, order_tmp_, 32);  // vertex ids < 2^31
     fit_count(in_, nin);
-    ContactShare* sorted = in_.view().p;
+    ContactShare* grouped = in_.view().p;
     if constexpr (S == Space::Cuda) {
       fit_count(share_write_, static_cast<std::int64_t>(sizeof(ContactShare)) * nin);
-      sorted = reinterpret_cast<ContactShare*>(share_write_.data());
+      grouped = reinterpret_cast<ContactShare*>(share_write_.data());
     }
-    for (std::int64_t j = 0; j < nin; ++j) sorted[j] = in[order_[j].second];
+    std::int64_t j = 0;
+    for (const std::int32_t v : share_first_) {
+      for (std::int32_t m = share_head_[v]; m >= 0; m = share_next_[m]) grouped[j++] = in[m];
+      share_head_[v] = -1;
+    }
     if constexpr (S == Space::Cuda)
-      if (nin > 0) cuda_copy_queued(in_.view().p, sorted, sizeof(ContactShare) * nin);
-    const ShareKeys key{pk1_.cview(), pk2_.cview(), tri_gid_.cview(), edge_gid_.cview()};
+      if (nin > 0) cuda_copy_queued(in_.view().p, grouped, sizeof(ContactShare) * nin);
     const auto shares = in_.cview();
     const auto ef = ent_f_.cview();
     const auto vcnt = vcnt_.cview();
     const auto vent = vent_.cview();
     const auto base = base_.cview();
+    const auto ekey = ekey_.cview();
     for_each(
         Exec{}, nin, QDEMSPH_LAMBDA(std::int64_t lo) {
           const int i = shares[lo].vertex;
@@ -1280,7 +1303,7 @@ class ContactStage {
           Vec3 s{};
           int a = b;
           for (std::int64_t c = next_share(shares, lo, end, -1); a < e || c >= 0;) {
-            if (c < 0 || (a < e && share_less(key(vent[a]), shares[c]))) {
+            if (c < 0 || (a < e && share_less(ekey[vent[a]], shares[c]))) {
               s += ef[vent[a++]];
             } else {
               s += shares[c].f;
@@ -1359,7 +1382,10 @@ class ContactStage {
   Buffer<std::int64_t> tri_gid_{S}, edge_gid_{S};
   Vec3Buffer base_{S};  // an MPI rank's share targets' force before contact (gather_local)
   Buffer<std::uint8_t> share_flag_{S};  // per owned vertex: a share target (set_share_targets)
-  std::vector<std::pair<std::uint64_t, std::int32_t>> order_, order_tmp_;  // merge_shares' sort
+  Buffer<ContactShare> ekey_{S};  // a share target's entries' keys, in global ids (gather_local)
+  // merge_shares' grouping: per owned vertex its last share (-1: none), per share the vertex's
+  // one before, the vertices with shares.
+  std::vector<std::int32_t> share_head_, share_next_, share_first_;
   std::vector<std::uint8_t> share_host_;  // share_flag_ on the host (merge_shares checks)
   bool local_sorted_ = false;             // gather_local ran for the last evaluation
   DeviceMark shares_mark_;                // after the shares' compaction (shares, read_marked)
