@@ -322,8 +322,9 @@ QDEMSPH_HD std::int64_t next_share(const Shares& shares, std::int64_t lo, std::i
 
 // Room for n elements in an array that follows a count growing over a run (records, entries,
 // shares): half as much again, so that the count's growth reallocates it a few times a run.
-// On a GPU each reallocation stalls the step (~0.25 ms an array; the cube block's ~18 arrays
-// grew every few tens of steps at 1/4 room), and on N ranks every rank's stall stalls them all.
+// Each growth is cheap on a GPU too (stream-ordered pool, core/memory.hpp); with cudaFree and
+// cudaMalloc it had stalled the step ~0.25 ms an array, and on N ranks every rank's stall
+// stalled them all.
 constexpr std::int64_t count_room(std::int64_t n) { return n + n / 2 + 64; }
 
 // At least n elements in b (a Buffer, or StagingBytes in bytes), grown with count_room's room;
