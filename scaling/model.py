@@ -12,7 +12,8 @@ Time per step of rank r (the step ends when the slowest rank ends):
        held tets = home tets + halo tets (a tet is computed on every rank owning one of its
        vertices, docs/parallel.md item 1: redundant work at the cuts); pairs_r = pairs per
        surface vertex x (owned + k ghost surface vertices): a rank finds candidate pairs
-       among all the surface it holds, ghosts included. k = 0.6 measured (`geometry.py
+       among all the surface it holds, ghosts included. k = 0.25 measured (below); before
+       whole bodies led their body pairs it was 0.6 (`geometry.py
        --validate`, pairs(N) / (N pairs(1)) = 1 + k ghost surface / owned surface): cube
        block on 2 H100s at d32fc91, pairs 1.074 x the 1-rank pairs while the held surface was
        1.125 x the owned, k = 0.59 (references/benchmarks/scaling/2026-11-26_x2_skin_overlap/
@@ -24,8 +25,9 @@ Time per step of rank r (the step ends when the slowest rank ends):
        k = 1.38, 1.43, 1.38; references/benchmarks/scaling/halo_validation_cubes_devvm.json).
        Since whole bodies lead their body pairs (5038aab: one rank searches a pair with a whole
        body) the cube block gives k = 0.27 / 0.21 on 2 / 4 H200s (pairs 1.034 / 1.067 x;
-       references/benchmarks/scaling/2026-11-26_h200_whole_bodies_lead/); the default stays
-       0.6, the value the cost set and the fitted round trip were calibrated with.
+       references/benchmarks/scaling/2026-11-26_h200_whole_bodies_lead/; the same at 05319f8,
+       2026-11-27_x4_pool_merge/call4_h200x4/): the default, 0.25, which the cost set
+       h200-05319f8 and the fitted round trip go with.
        k = 0: every candidate pair of border primitives searched on one rank only;
        g: the share of a particle's work a ghost costs, 0.15 (a ghost is sorted into the cell
        list; the density and force loops run over owned particles only).
@@ -115,25 +117,22 @@ class Network:
 #    1.70 ms/step against 1.25 predicted without it, (1.70 - 1.25) / 3 round trips; with it the
 #    model gives cubes-weak 5.82 (measured 5.99) and dambreak-weak 6.70 (measured 7.06) ms/step.
 # Host round trip of a GPU rank with device-resident halos (ipc-ndr): least squares over the
-# three weak cases on two H100s at d32fc91, their in-run rebuilds taken out (`model.py
-# fit-round-trip --costs h100-d32fc91`, k 0.6; references/benchmarks/scaling/
-# 2026-11-26_x2_skin_overlap/: call5_h100/C_cubes-weak_r{1,2,3} and C_topple-weak_r{1,2,3},
-# medians, call4_h100/C_db): measured minus predicted without it, cubes +0.063 ms (3 round
-# trips), dominoes +0.213 ms (3), dam break +0.324 ms (4) -> 62.5 us per round trip. One
-# constant fits badly: residuals -0.124, +0.026, +0.074 ms (-6.3 %, +3.5 %, +1.8 % of the
-# measured 1.987, 0.741, 4.078 ms). Per round trip the cube block asks 21 us and the dam break
-# 81; the dominoes' 71 is mostly the set's cube-block tet and pair costs, which put their one-GPU
-# step at 0.496 ms against 0.635 measured (from their own one-GPU record: 23 us). Two of the
-# bodies' three (the x, v halo and, since d32fc91, the skin test's allreduce) run while the
-# device computes the interior tets, and only the contact shares wait on an idle device; the
-# fluid's four each follow a device synchronisation (skin test; the x, v and two rho, p, m
-# refreshes). The counts stand (the host still waits and runs MPI that often); the overlap
-# shows as the bodies' lower time per round trip, which one constant averages. Two H200s
-# (d32fc91, calls 3 and 6 there, each case's own one-GPU costs): cube block 22-34 us, dominoes
-# 21-27; the dam break at 98bb692 (2026-11-26_h200x2_rebuilds/call12_98bb692/new_db) 83. Before:
-# 67 us at 01b2aab (costs h100-ipc, k 1.4; 2026-11-25_h100x2_ipc/records/: cubes -0.010 ms,
-# dominoes +0.225, dam break +0.412).
-IPC_ROUND_TRIP = 62.5e-6
+# three weak cases on 2 and 4 H200s at 05319f8, their in-run rebuilds taken out (`model.py
+# fit-round-trip --costs h200-05319f8`, k 0.25; references/benchmarks/scaling/
+# 2026-11-27_x4_pool_merge/call4_h200x4/N_*/records/*_n2.json, *_n4.json, medians): measured
+# minus predicted without it, cube block +0.061 / +0.042 ms at 2 / 4 GPUs (3 round trips),
+# dominoes +0.173 / +0.175 (3), dam break +0.313 / +0.458 (4) -> 65.2 us per round trip. One
+# constant fits badly: residuals -0.135 / -0.153, -0.023 / -0.021, +0.052 / +0.197 ms. Per
+# round trip the cube block asks 14-20 us, the dominoes 58 (their one-GPU step is 0.442 ms at
+# the set's cube-block tet and pair costs, 0.564 measured) and the dam break 78-114. Two of the
+# bodies' three round trips (the x, v halo and the skin test's allreduce) run while the device
+# computes the interior tets, and the contact shares' behind the element gather; the fluid's
+# four each follow a device synchronisation (skin test; the x, v and two rho, p, m refreshes).
+# The counts stand (the host still waits and runs MPI that often); the overlap shows as the
+# bodies' lower time per round trip, which one constant averages. Before: 62.5 us at d32fc91
+# (costs h100-d32fc91, k 0.6, two H100s, 2026-11-26_x2_skin_overlap/: cubes +0.063 ms, dominoes
+# +0.213, dam break +0.324), 67 us at 01b2aab (costs h100-ipc, k 1.4).
+IPC_ROUND_TRIP = 65.2e-6
 
 #  * CUDA IPC peer copies between the two H100s of one host (NVLink, scaling/probes/devicecomm.cu,
 #    2026-11-25): 8 B 7.6 us (copy + stream synchronisation), 1 MB 10.7 us (98 GB/s), 16 MB 53 us
@@ -187,7 +186,7 @@ class Options:
     rebalance_interval: int = 0   # steps between rebalances (0: none)
     migrated_bytes: float = 0.0   # per rebalance, per rank
     pairs_per_surface_vertex: float = 0.0
-    ghost_pair_weight: float = 0.6  # k: candidate pairs per ghost surface vertex / per owned one
+    ghost_pair_weight: float = 0.25  # k: candidate pairs per ghost surface vertex / per owned one
     rebuild_s_per_step: float = 0.0  # ghost / layout rebuilds during the run, amortised (measured:
     #                                  a host-side rebuild times rebuilds per step; the same per
     #                                  rank in weak scaling, the global displacement triggers it)
@@ -431,8 +430,8 @@ def main(argv=None):
     p.add_argument("--rebuild-ms-per-step", type=float, default=0.0,
                    help="ghost / layout rebuilds during the run, amortised per step (measured: parallel "
                         "migration per step of a 2-rank record)")
-    p.add_argument("--ghost-pairs", type=float, default=0.6,
-                   help="k, candidate pairs of a ghost surface vertex per owned one (0.6 measured; 0: pairs once)")
+    p.add_argument("--ghost-pairs", type=float, default=Options.ghost_pair_weight,
+                   help="k, candidate pairs of a ghost surface vertex per owned one (0.25 measured; 0: pairs once)")
     p.add_argument("--json", help="write the prediction here")
     c = sub.add_parser("calibrate", help="per-item costs from single-rank run records / bench records")
     c.add_argument("records", nargs="+")

@@ -306,7 +306,7 @@ def prediction_plots():
     # between nodes too (CUDA-aware MPI) with full overlap. In-run rebuilds are not in these
     # (scaling/README.md: measured, added by --rebuild-ms-per-step).
     k = model.Options().ghost_pair_weight
-    plan = [("cuda", "h100-d32fc91", [("ipc-ndr", 0.0, k), ("ipc-ndr", 0.0, 0.0), ("cuda-aware-ndr", 1.0, 0.0)]),
+    plan = [("cuda", "h200-05319f8", [("ipc-ndr", 0.0, k), ("ipc-ndr", 0.0, 0.0), ("cuda-aware-ndr", 1.0, 0.0)]),
             ("cpu", "cpu-core-devvm", [("cpu-shm", 0.0, k), ("cpu-shm", 0.0, 0.0), ("tsubame25", 0.0, 0.0)])]
     ranks = [1, 2, 4, 8, 16, 32, 64, 128, 256, 512]
     for gfile in sorted(RECORDS.glob("geometry_*.json")):

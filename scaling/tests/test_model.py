@@ -215,15 +215,16 @@ def test_round_trip_cases_take_out_rebuilds_and_round_trips(tmp_path):
 def test_ipc_round_trip_is_the_fit_of_its_records():
     """IPC_ROUND_TRIP is what `model.py fit-round-trip` gives on the records its comment names
     (a cost set, geometry or option change that moves it means: fit it again)."""
-    d = model.REPO / "references" / "benchmarks" / "scaling" / "2026-11-26_x2_skin_overlap"
-    files = [d / f"call5_h100/C_{s}_r{i}/records/{s}_cuda_n2.json" for s in ("cubes-weak", "topple-weak")
-             for i in (1, 2, 3)] + [d / "call4_h100/C_db/records/dambreak-weak_cuda_n2.json"]
+    d = model.REPO / "references" / "benchmarks" / "scaling" / "2026-11-27_x4_pool_merge" / "call4_h200x4"
+    files = [d / f"N_{s}_r{i}/records/{s}_cuda_n{n}.json" for s, rounds in
+             (("cubes-weak", (1,)), ("dambreak-weak", (1, 2)), ("topple-weak", (1, 2)))
+             for i in rounds for n in (2, 4)]
     if not all(f.exists() for f in files):
         pytest.skip("records not present")
     ppv = json.loads((model.HERE / "costs.json").read_text())["pairs_per_surface_vertex"]
-    cases = model.round_trip_cases([json.loads(f.read_text()) for f in files], model.load_costs("h100-d32fc91"),
+    cases = model.round_trip_cases([json.loads(f.read_text()) for f in files], model.load_costs("h200-05319f8"),
                                    model.NETWORKS["ipc-ndr"], model.Options.ghost_pair_weight,
                                    model.REPO / "references" / "benchmarks" / "scaling", ppv)
-    assert [c["round_trips"] for c in cases] == [3, 4, 3]  # cubes, dam break, dominoes
+    assert [c["round_trips"] for c in cases] == [3, 3, 4, 4, 3, 3]  # cubes, dam break, dominoes at 2, 4
     assert model.fit_round_trip(cases)["round_trip_s"] == pytest.approx(model.IPC_ROUND_TRIP, abs=0.5e-6)
     assert model.NETWORKS["ipc-ndr"].round_trip == model.IPC_ROUND_TRIP
