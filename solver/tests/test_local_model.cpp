@@ -346,6 +346,30 @@ TEST(LocalModel, CornerListsAreInTheOneRankOrder) {
 // when the face's body is whole and first (face_leads), else a point-face or wall record's free
 // side-1 vertex, else the free vertex of smallest global id (for an edge pair, of the body
 // first: a whole body before a split one, else by body_priority), or none.
+// A vertex's shares are merged in the one-rank order of its entries: by record key k1, then k2,
+// then slot (share_less). next_share walks a run in that order whatever order the shares
+// arrived in, without moving them.
+TEST(LocalModel, AVertexsSharesAreTakenInKeyOrder) {
+  auto share = [](std::uint64_t k1, std::uint64_t k2, int slot) {
+    ContactShare c;
+    c.k1 = k1, c.k2 = k2, c.slot = slot;
+    return c;
+  };
+  const std::vector<ContactShare> run = {share(7, 1, 0), share(3, 9, 2), share(7, 0, 3),
+                                         share(3, 9, 1), share(2, 50, 0)};
+  EXPECT_TRUE(share_less(run[4], run[3]));   // k1 first
+  EXPECT_TRUE(share_less(run[2], run[0]));   // then k2
+  EXPECT_TRUE(share_less(run[3], run[1]));   // then the slot
+  EXPECT_FALSE(share_less(run[1], run[1]));  // strict
+  std::vector<std::int64_t> order;
+  for (std::int64_t c = next_share(run, 0, 5, -1); c >= 0; c = next_share(run, 0, 5, c))
+    order.push_back(c);
+  EXPECT_EQ(order, (std::vector<std::int64_t>{4, 3, 1, 2, 0}));
+  EXPECT_EQ(next_share(run, 2, 4, -1), 3);  // a sub-run [2, 4): (3, 9, 1) before (7, 0, 3)
+  EXPECT_EQ(next_share(run, 2, 4, 3), 2);
+  EXPECT_EQ(next_share(run, 2, 4, 2), -1);
+}
+
 TEST(LocalModel, AnchorSlotKnownAnswers) {
   struct Ids {  // gid = index; ids >= 1000000 are a fixed body's; body = id / 100
     bool free(std::int64_t i) const { return i < 1000000; }
