@@ -447,39 +447,41 @@ std::vector<std::byte> CommEngine::exchange(std::span<const std::byte> send,
     if (send_off[r + 1] > send_off[r] && r != rank_ && !is_nbr(r))
       throw std::invalid_argument("comm plan: exchange() to rank " + std::to_string(r) +
                                   ", not a neighbour");
-  // Counts, then the records.
+  // One message a neighbour, of the size its sender knows; the receiver learns it by a matched
+  // probe: a single round where counts, then records, took two (on a GPU rank the contact shares
+  // end the step this way).
   const std::size_t nn = nbrs_.size();
-  std::vector<std::int64_t> scount(nn), rcount(nn);
   std::vector<MPI_Request> req;
   req.reserve(2 * nn);
-  for (std::size_t k = 0; k < nn; ++k) {
-    scount[k] = send_off[nbrs_[k] + 1] - send_off[nbrs_[k]];
+  last_bytes_ = 0;
+  for (const int r : nbrs_) {
+    const std::int64_t n = send_off[r + 1] - send_off[r];
     req.emplace_back();
-    MPI_Irecv(&rcount[k], 1, MPI_INT64_T, nbrs_[k], kTag + 1, comm_, &req.back());
-    req.emplace_back();
-    MPI_Isend(&scount[k], 1, MPI_INT64_T, nbrs_[k], kTag + 1, comm_, &req.back());
+    MPI_Isend(send.data() + send_off[r] * stride, as_count(n * stride), MPI_BYTE, r, kTag + 2,
+              comm_, &req.back());
+    last_bytes_ += n * static_cast<std::int64_t>(stride);
   }
-  MPI_Waitall(static_cast<int>(req.size()), req.data(), MPI_STATUSES_IGNORE);
+  std::vector<MPI_Message> msg(nn);
   std::vector<std::int64_t> roff(size_ + 1, 0);
-  for (int r = 0; r < size_; ++r) roff[r + 1] = r == rank_ ? send_off[r + 1] - send_off[r] : 0;
-  for (std::size_t k = 0; k < nn; ++k) roff[nbrs_[k] + 1] = rcount[k];
+  roff[rank_ + 1] = send_off[rank_ + 1] - send_off[rank_];
+  for (std::size_t k = 0; k < nn; ++k) {
+    MPI_Status st;
+    MPI_Mprobe(nbrs_[k], kTag + 2, comm_, &msg[k], &st);
+    int bytes = 0;
+    MPI_Get_count(&st, MPI_BYTE, &bytes);
+    if (bytes % static_cast<int>(stride) != 0)
+      throw std::logic_error("comm plan: exchange() got " + std::to_string(bytes) +
+                             " bytes from rank " + std::to_string(nbrs_[k]) + ", not records of " +
+                             std::to_string(stride));
+    roff[nbrs_[k] + 1] = bytes / static_cast<std::int64_t>(stride);
+  }
   for (int r = 0; r < size_; ++r) roff[r + 1] += roff[r];
   std::vector<std::byte> out(roff[size_] * stride);
-  req.clear();
-  last_bytes_ = 0;
   for (std::size_t k = 0; k < nn; ++k) {
     const int r = nbrs_[k];
-    if (rcount[k] > 0) {
-      req.emplace_back();
-      MPI_Irecv(out.data() + roff[r] * stride, as_count(rcount[k] * stride), MPI_BYTE, r, kTag + 2,
-                comm_, &req.back());
-    }
-    if (scount[k] > 0) {
-      req.emplace_back();
-      MPI_Isend(send.data() + send_off[r] * stride, as_count(scount[k] * stride), MPI_BYTE, r,
-                kTag + 2, comm_, &req.back());
-      last_bytes_ += scount[k] * stride;
-    }
+    req.emplace_back();
+    MPI_Imrecv(out.data() + roff[r] * stride, as_count((roff[r + 1] - roff[r]) * stride), MPI_BYTE,
+               &msg[k], &req.back());
   }
   if (roff[rank_ + 1] > roff[rank_])
     std::memcpy(out.data() + roff[rank_] * stride, send.data() + send_off[rank_] * stride,
