@@ -546,3 +546,39 @@ int main(int argc, char** argv) {
   MPI_Finalize();
   return any;
 }
+
+// exchange(): each neighbour's records arrive whole, by source rank (this rank's own among
+// them), however many there are, none included (one message a neighbour, sized by a probe).
+TEST(HaloPlan, VariableLengthExchangeBySourceRank) {
+  HaloSetup s = halo_setup();
+  CommEngine& e = s.plan->engine();
+  const int me = rank_of(), np = size_of();
+  const auto count = [](int from, int to) { return (from + 2 * to) % 3; };  // 0, 1 or 2
+  struct Rec {
+    std::int64_t from, to, k;
+  };
+  std::vector<int> dest = e.neighbours();
+  dest.push_back(me);
+  std::sort(dest.begin(), dest.end());
+  std::vector<Rec> send;
+  std::vector<std::int64_t> off(np + 1, 0);
+  for (int r = 0; r < np; ++r) {
+    if (std::binary_search(dest.begin(), dest.end(), r))
+      for (int k = 0; k < count(me, r); ++k) send.push_back({me, r, k});
+    off[r + 1] = static_cast<std::int64_t>(send.size());
+  }
+  for (int round = 0; round < 2; ++round) {  // twice: no message of the first left over
+    const std::vector<std::byte> in = e.exchange(std::as_bytes(std::span(send)), off, sizeof(Rec));
+    std::vector<Rec> want;
+    for (const int r : dest)
+      for (int k = 0; k < count(r, me); ++k) want.push_back({r, me, k});
+    ASSERT_EQ(in.size(), want.size() * sizeof(Rec));
+    for (std::size_t j = 0; j < want.size(); ++j) {
+      Rec got;
+      std::memcpy(&got, in.data() + j * sizeof(Rec), sizeof(Rec));
+      EXPECT_EQ(got.from, want[j].from);
+      EXPECT_EQ(got.to, want[j].to);
+      EXPECT_EQ(got.k, want[j].k);
+    }
+  }
+}
