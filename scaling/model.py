@@ -374,6 +374,8 @@ def costs_from_record(rec: dict) -> dict:
         raise ValueError("calibrate from single-rank records")
     ph, it = rec["phases_per_step"], rec["items"]
     if it.get("tets"):
+        # On a GPU the Stepper's kicks and drift only launch (since 2026-11-27): their device
+        # time is in "elements", so in the tet cost, and "integration" is launch time.
         c["tet"] = ph.get("elements", 0.0) / it["tets"]
         c["vertex"] = ph.get("integration", 0.0) / max(it.get("vertices", 0), 1)
     if it.get("contact_pairs"):
