@@ -69,6 +69,18 @@ def sh(cmd, timeout=30):
         return ""
 
 
+def revision_of(qdemsph: str) -> str:
+    """The revision the binary was built from: QDEMSPH_REVISION, else the REVISION file of the
+    pack it comes from (PACK/bin/qdemsph; ci/gpu/pack.sh writes PACK/REVISION), else this
+    checkout's. Several packs measured in one call so keep their own revisions."""
+    if os.environ.get("QDEMSPH_REVISION"):
+        return os.environ["QDEMSPH_REVISION"]
+    pack_rev = Path(qdemsph).resolve().parent.parent / "REVISION"
+    if pack_rev.is_file() and pack_rev.read_text().strip():
+        return pack_rev.read_text().strip()
+    return sh(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"])
+
+
 def machine_facts(qdemsph: str) -> dict:
     cpu = platform.processor()
     try:
@@ -87,7 +99,7 @@ def machine_facts(qdemsph: str) -> dict:
             "usable_cores": len(os.sched_getaffinity(0)), "lscpu": sockets, "memory_bytes": mem,
             "gpus": gpus, "gpu_topology": topo, "mpirun": sh(["mpirun", "--version"]).split("\n")[0],
             "qdemsph": sh([qdemsph, "version"]).split("\n")[0],
-            "revision": os.environ.get("QDEMSPH_REVISION") or sh(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"]),
+            "revision": revision_of(qdemsph),
             "kernel": platform.release(), "loadavg_before": list(os.getloadavg())}
 
 

@@ -123,3 +123,16 @@ def test_preset_values_can_be_overridden_and_keep_their_own_series():
             "machine": {}}
     ser = report.series([base, dict(base, params={"cubes_per_rank": 864})])
     assert len(ser) == 2 and any(k[4] == "cubes_per_rank=864" for k in ser)
+
+
+def test_revision_is_the_packs_the_binary_comes_from(tmp_path, monkeypatch):
+    monkeypatch.delenv("QDEMSPH_REVISION", raising=False)
+    (tmp_path / "bin").mkdir()
+    binary = tmp_path / "bin" / "qdemsph"
+    binary.write_text("")
+    checkout = run.revision_of(str(binary))  # no REVISION beside it: this checkout's
+    (tmp_path / "REVISION").write_text("abc1234\n")
+    assert run.revision_of(str(binary)) == "abc1234"
+    assert checkout != "abc1234"
+    monkeypatch.setenv("QDEMSPH_REVISION", "def5678")
+    assert run.revision_of(str(binary)) == "def5678"
