@@ -267,8 +267,8 @@ static_assert(std::is_trivially_copyable_v<ContactTopology>);
 
 // ContactModel::body_whole for body_order on the host (empty: every body split).
 struct WholeBodies {
-  const std::vector<std::uint8_t>& w;
-  bool whole(std::int64_t b) const { return !w.empty() && w[b] != kSplit; }
+  std::span<const std::uint8_t> w;
+  QDEMSPH_HD bool whole(std::int64_t b) const { return !w.empty() && w[b] != kSplit; }
 };
 
 // Appends a record through an atomic counter (ContactStage::narrow_phase): slot k = count++,
