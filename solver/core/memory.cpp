@@ -27,6 +27,7 @@ bool cuda_available() { return false; }
 void cuda_sync() {}
 void cuda_copy_async(void*, const void*, std::size_t) { no_cuda(); }
 void cuda_copy_wait() {}
+void cuda_copy_fence() { no_cuda(); }
 void cuda_copy_queued(void*, const void*, std::size_t) { no_cuda(); }
 DeviceMark::~DeviceMark() = default;
 void DeviceMark::record() { no_cuda(); }

@@ -41,6 +41,9 @@ void cuda_sync();
 // peer copies overlap the interior work. cuda_copy_wait returns when those copies are done.
 void cuda_copy_async(void* dst, const void* src, std::size_t bytes);
 void cuda_copy_wait();
+// The default stream's work queued from now on waits for the copy stream's copies queued so far
+// (an event between the streams; the host does not wait).
+void cuda_copy_fence();
 // A copy between page-locked host memory and this process's device memory (either way), queued
 // on the default stream: after the kernels queued so far, before those queued later. It returns
 // at once; the bytes are there once a DeviceMark recorded after it has been waited for.

@@ -294,6 +294,16 @@ void cuda_copy_wait() {
   QDEMSPH_CUDA_CHECK(cudaStreamSynchronize(copy_stream()), "cudaStreamSynchronize");
 }
 
+void cuda_copy_fence() {
+  static const cudaEvent_t e = [] {
+    cudaEvent_t t = nullptr;
+    QDEMSPH_CUDA_CHECK(cudaEventCreateWithFlags(&t, cudaEventDisableTiming), "cudaEventCreate");
+    return t;
+  }();
+  QDEMSPH_CUDA_CHECK(cudaEventRecord(e, copy_stream()), "cudaEventRecord (copy stream)");
+  QDEMSPH_CUDA_CHECK(cudaStreamWaitEvent(cudaStreamLegacy, e, 0), "cudaStreamWaitEvent");
+}
+
 void cuda_copy_queued(void* dst, const void* src, std::size_t bytes) {
   QDEMSPH_CUDA_CHECK(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDefault),
                      "cudaMemcpyAsync (queued)");
