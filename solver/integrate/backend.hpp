@@ -161,6 +161,11 @@ class Backend {
   virtual void mark_positions() = 0;
   virtual void queue_max_moved() = 0;
   virtual double max_moved() = 0;
+  // drift(h), then queue_max_moved(): in one pass over the vertices where the backend can.
+  virtual void drift_and_queue_max_moved(double h) {
+    drift(h);
+    queue_max_moved();
+  }
   // Enables the fluid coupling force fc (zero until the fluid writes it); views stay valid
   // until the next upload.
   virtual SolidViews solid_views();

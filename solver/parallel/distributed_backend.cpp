@@ -247,17 +247,22 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   }
   // On a GPU the next force evaluation's skin-test reduction and halo packing are queued with
   // the drift, which makes x final (cube block, 2 GPUs: the device had waited 15-25 us a step
-  // more than on one GPU for those launches). The scope does not synchronise: the interior tets,
-  // which compute_forces queues next, follow on the device without a gap (the skin test and the
+  // more than on one GPU for those launches); the reduction is the drift's own kernel
+  // (drift_and_queue_max_moved). The scope does not synchronise: the interior tets, which
+  // compute_forces queues next, follow on the device without a gap (the skin test and the
   // exchange wait for their own marks); the drift's device time counts in the halo's scopes.
   void drift(double h) override {
     auto s = device_halo() ? timers_.launch("integration") : timers_.scope("integration");
-    local_->drift(h);
-    if (device_halo()) {
-      queue_skin(timers_);
-      queue_pack(timers_);
-      queued_ = true;
+    if (!device_halo()) {
+      local_->drift(h);
+      return;
     }
+    if (contact_)
+      local_->drift_and_queue_max_moved(h);
+    else
+      local_->drift(h);
+    queue_pack(timers_);
+    queued_ = true;
   }
   void damped_step(double dt, double c) override {
     auto s = timers_.scope("integration");
