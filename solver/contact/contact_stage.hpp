@@ -306,19 +306,10 @@ QDEMSPH_HD bool share_less(const ContactShare& a, const ContactShare& b) {
   return a.slot < b.slot;
 }
 
-// Of the shares [lo, end) (a vertex's few, distinct in that order), the one after shares[prev]
-// in share_less order (the first for prev < 0); -1 after the last. Nothing moves: the threads
-// that find a vertex's run only read it.
-template <class Shares>
-QDEMSPH_HD std::int64_t next_share(const Shares& shares, std::int64_t lo, std::int64_t end,
-                                   std::int64_t prev) {
-  std::int64_t best = -1;
-  for (std::int64_t c = lo; c < end; ++c)
-    if ((prev < 0 || share_less(shares[prev], shares[c])) &&
-        (best < 0 || share_less(shares[c], shares[best])))
-      best = c;
-  return best;
-}
+// A share target's entries are merged with its shares kMergeChunk at a time: their keys are
+// read together (registers), so that the loads, a chain through vent_ to ekey_ an entry, are
+// in flight at once.
+inline constexpr int kMergeChunk = 8;
 
 // Room for n elements in an array that follows a count growing over a run (records, entries,
 // shares): half as much again, so that the count's growth reallocates it a few times a run.
@@ -1259,8 +1250,9 @@ class ContactStage {
   // Each vertex that other ranks sent shares for: f = its force before contact (base_) + its
   // entries and those shares merged in key order and summed (the one-rank order); every other
   // vertex has its sum from gather_local. The host groups the shares by vertex (linked through
-  // share_head_, O(n): no sort) and queues their copy; on the device a thread a vertex takes its
-  // few shares in key order and compares them with its entries' keys (gather_local's ekey_).
+  // share_head_, O(n)), sorts each vertex's few by key and queues their copy; on the device a
+  // thread a vertex walks its entries (in key order, with their keys in gather_local's ekey_)
+  // and its shares side by side.
   void merge_shares(Vec3View f, std::span<const ContactShare> in) {
     const auto nin = static_cast<std::int64_t>(in.size());
     for (const ContactShare& c : in)
@@ -1286,8 +1278,11 @@ class ContactStage {
     }
     std::int64_t j = 0;
     for (const std::int32_t v : share_first_) {
+      const std::int64_t first = j;
       for (std::int32_t m = share_head_[v]; m >= 0; m = share_next_[m]) grouped[j++] = in[m];
       share_head_[v] = -1;
+      std::sort(grouped + first, grouped + j,
+                [](const ContactShare& a, const ContactShare& b) { return share_less(a, b); });
     }
     // On the copy stream, the copy overlaps the element gather and the contact sums queued
     // before it; the merge waits for it (cube block, 4 x H100: it had run after them, 16 us on
@@ -1310,19 +1305,26 @@ class ContactStage {
         Exec{}, nin, QDEMSPH_LAMBDA(std::int64_t lo) {
           const int i = shares[lo].vertex;
           if (lo > 0 && shares[lo - 1].vertex == i) return;  // the thread of its first share
-          std::int64_t end = lo + 1;
-          while (end < nin && shares[end].vertex == i) ++end;
-          const int b = vcnt[i], e = vcnt[i + 1];
+          std::int64_t c = lo;
           Vec3 s{};
-          int a = b;
-          for (std::int64_t c = next_share(shares, lo, end, -1); a < e || c >= 0;) {
-            if (c < 0 || (a < e && share_less(ekey[vent[a]], shares[c]))) {
-              s += ef[vent[a++]];
-            } else {
-              s += shares[c].f;
-              c = next_share(shares, lo, end, c);
-            }
+          const int e = vcnt[i + 1];
+          for (int a = vcnt[i]; a < e; a += kMergeChunk) {
+            ContactShare key[kMergeChunk];
+            QDEMSPH_UNROLL
+            for (int k = 0; k < kMergeChunk; ++k)
+              if (a + k < e) {
+                const ContactShare& ek = ekey[vent[a + k]];
+                key[k].k1 = ek.k1, key[k].k2 = ek.k2, key[k].slot = ek.slot;
+              }
+            QDEMSPH_UNROLL
+            for (int k = 0; k < kMergeChunk; ++k)
+              if (a + k < e) {
+                for (; c < nin && shares[c].vertex == i && !share_less(key[k], shares[c]); ++c)
+                  s += shares[c].f;
+                s += ef[vent[a + k]];
+              }
           }
+          for (; c < nin && shares[c].vertex == i; ++c) s += shares[c].f;
           f.set(i, base[i] + s);
         });
   }

@@ -10,6 +10,14 @@
 #define QDEMSPH_LAMBDA [=]
 #endif
 
+// Before a loop of constant trip count: unrolled in device code, so that a small array it
+// indexes stays in registers (the host compiler decides for itself).
+#if defined(__CUDA_ARCH__)
+#define QDEMSPH_UNROLL _Pragma("unroll")
+#else
+#define QDEMSPH_UNROLL
+#endif
+
 namespace qdemsph {
 // Launch hint for for_each: keep at least N blocks of 256 threads resident per SM on CUDA
 // (caps the registers a thread at 65536 / (256 N)); the host ignores it. For register-heavy
