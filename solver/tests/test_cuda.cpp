@@ -4,7 +4,9 @@
 // a preload, gravity and mass damping, with a perturbed initial state so every force term
 // is non-zero. Each test runs the same calls on both backends and compares what the host
 // sees; the measured differences are printed as "[cuda-vs-cpu] name max_rel=..." lines that
-// ci/gpu_session.sh collects. All tests SKIP when no GPU is visible (CI, build machines).
+// ci/gpu_session.sh collects. Without a visible GPU (CI, build machines) they SKIP, except
+// DriftWithQueuedMaxMovedIsDriftThenQueue, which checks each backend against itself and runs
+// its CPU half there.
 // Then contact scenes (sliding cube, two-body impact, a small stack) and an SPH dam break run
 // a short horizon on both backends: same pair and contact counts every step, positions and
 // energies equal to a stated tolerance.
