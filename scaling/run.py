@@ -76,9 +76,8 @@ def revision_of(qdemsph: str) -> str:
     if os.environ.get("QDEMSPH_REVISION"):
         return os.environ["QDEMSPH_REVISION"]
     pack_rev = Path(qdemsph).resolve().parent.parent / "REVISION"
-    if pack_rev.is_file() and pack_rev.read_text().strip():
-        return pack_rev.read_text().strip()
-    return sh(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"])
+    rev = pack_rev.read_text().strip() if pack_rev.is_file() else ""
+    return rev or sh(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"])
 
 
 def machine_facts(qdemsph: str) -> dict:

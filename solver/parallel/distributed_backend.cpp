@@ -252,11 +252,12 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   // compute_forces queues next, follow on the device without a gap (the skin test and the
   // exchange wait for their own marks); the drift's device time counts in the halo's scopes.
   void drift(double h) override {
-    auto s = device_halo() ? timers_.launch("integration") : timers_.scope("integration");
     if (!device_halo()) {
+      auto s = timers_.scope("integration");
       local_->drift(h);
       return;
     }
+    auto s = timers_.launch("integration");
     if (contact_)
       local_->drift_and_queue_max_moved(h);
     else
