@@ -56,6 +56,14 @@ QDEMSPH_HD PointFace point_face(Vec3 a, Vec3 v0, Vec3 v1, Vec3 v2) {
   return r;
 }
 
+// Whether the points q[0..2] all lie farther than `gap` from the plane through p with unit
+// normal n, on one side (false for a zero n or NaN). Every point of the triangle they span, and
+// of its edges, is then farther than `gap` from every point of that plane.
+QDEMSPH_HD bool beyond_plane(Vec3 p, Vec3 n, const Vec3* q, double gap) {
+  const double s0 = dot(q[0] - p, n), s1 = dot(q[1] - p, n), s2 = dot(q[2] - p, n);
+  return (s0 > gap && s1 > gap && s2 > gap) || (s0 < -gap && s1 < -gap && s2 < -gap);
+}
+
 struct EdgeEdge {
   bool valid = false;   // non-parallel, closest points strictly inside both segments
   double s = 0, t = 0;  // segment parameters of the closest points

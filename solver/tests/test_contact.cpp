@@ -5,7 +5,12 @@
 
 #include <cmath>
 #include <cstring>
+#include <map>
+#include <random>
+#include <tuple>
 
+#include "contact/contact_stage.hpp"
+#include "core/exec_host.hpp"
 #include "integrate/stepper.hpp"
 #include "mesh/gmsh_io.hpp"
 #include "scene_fixture.hpp"
@@ -239,6 +244,85 @@ TEST(Contact, UploadAgainStartsAfresh) {
   EXPECT_EQ(ea.total(), eb.total());
   EXPECT_EQ(ea.contact_dissipated, eb.contact_dissipated);
   EXPECT_EQ(fresh.backend->stage_seconds().size(), used.backend->stage_seconds().size());
+}
+
+// The narrow phase's early-outs (ContactTopology::narrow_tris) drop no contact: the records of
+// a stage equal those of the exact tests (point_face, edge_edge) on every feature pair of two
+// bodies, with the same acceptance. Box b is tilted against box a's +x face and every vertex
+// is jittered by up to 0.8 D_DEM, so the features' gaps straddle both thresholds.
+TEST(Contact, NarrowPhaseFindsWhatTestingEveryFeaturePairFinds) {
+  const double d_dem = 0.01;
+  auto p = make_problem(R"(
+run: {end_time: 1}
+materials: {m: {E: 1.0e6, nu: 0.3, density: 1000}}
+contact: {d_dem: 0.01}
+bodies:
+  - {name: a, material: m, mesh: {type: box, size: [0.2, 0.2, 0.2], cells: [4, 4, 4]}}
+  - {name: b, material: m, mesh: {type: box, origin: [0.21, 0, 0], size: [0.2, 0.2, 0.2], cells: [4, 4, 4]}}
+)");
+  const ContactModel& c = p.model.contact;
+  const BodyRange& bb = p.model.bodies[1];
+  std::int64_t point_face_hits = 0, edge_hits = 0;
+  for (const auto& [ay, az, seed] : {std::tuple{0.03, 0.05, 1u}, std::tuple{-0.04, 0.02, 2u},
+                                     std::tuple{0.0, 0.0, 3u}}) {
+    Model m = p.model;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> jitter(-0.8 * d_dem, 0.8 * d_dem);
+    const Vec3 o{0.21, 0.1, 0.1};  // b's face centre: tilted about it by ay (y) and az (z)
+    for (std::int64_t i = 0; i < m.n_vertices(); ++i) {
+      Vec3 q = m.X[i];
+      if (i >= bb.v_begin && i < bb.v_end) {
+        const Vec3 r = q - o;
+        const Vec3 ry{r.x * std::cos(ay) + r.z * std::sin(ay), r.y, -r.x * std::sin(ay) + r.z * std::cos(ay)};
+        q = o + Vec3{ry.x * std::cos(az) - ry.y * std::sin(az), ry.x * std::sin(az) + ry.y * std::cos(az), ry.z};
+      }
+      m.x[i] = q + Vec3{jitter(rng), jitter(rng), jitter(rng)};
+    }
+    ContactStage<HostExec> stage;
+    stage.upload(m);
+    Vec3Buffer x, v;
+    x.assign(m.x);
+    v.assign(m.v);
+    stage.evaluate(x.cview(), v.cview(), 0);
+    const ContactTopology t = stage.topology();
+
+    // (type, vertices) -> d of every contact, by the exact tests alone.
+    std::map<std::tuple<int, int, int, int, int>, double> want, got;
+    const auto ntri = static_cast<std::int64_t>(c.tri_v.size());
+    for (std::int64_t s1 = 0; s1 < ntri; ++s1)
+      for (std::int64_t s2 = 0; s2 < ntri; ++s2) {
+        if (c.tri_body[s1] == c.tri_body[s2]) continue;
+        const double pen = d_dem + 0.5 * std::min(t.body_h[0], t.body_h[1]);
+        const auto& f = c.tri_v[s2];
+        for (std::int64_t q = c.own_v_off[s1]; q < c.own_v_off[s1 + 1]; ++q) {
+          const int A = c.own_v[q];
+          const PointFace pf = point_face(m.x[A], m.x[f[0]], m.x[f[1]], m.x[f[2]]);
+          if (pf.inside && pf.s < d_dem && pf.s > -pen) want[{kPointFace, A, f[0], f[1], f[2]}] = pf.s;
+        }
+        if (s2 < s1) continue;  // an edge pair once
+        for (std::int64_t qa = c.own_e_off[s1]; qa < c.own_e_off[s1 + 1]; ++qa)
+          for (std::int64_t qb = c.own_e_off[s2]; qb < c.own_e_off[s2 + 1]; ++qb) {
+            const int e1 = std::min(c.own_e[qa], c.own_e[qb]), e2 = std::max(c.own_e[qa], c.own_e[qb]);
+            const auto &ea = c.edges[e1], &eb = c.edges[e2];
+            const EdgeEdge ee = edge_edge(m.x[ea[0]], m.x[ea[1]], m.x[eb[0]], m.x[eb[1]],
+                                          t.edge_normal(e1), t.edge_normal(e2));
+            if (ee.valid && ee.d < d_dem && ee.d > -d_dem) want[{kEdgeEdge, ea[0], ea[1], eb[0], eb[1]}] = ee.d;
+          }
+      }
+    for (const ContactRecord& r : stage.records()) got[{r.type, r.v[0], r.v[1], r.v[2], r.v[3]}] = r.d;
+    for (const auto& [k, d] : want) {
+      const auto it = got.find(k);
+      ASSERT_NE(it, got.end()) << "seed " << seed << ": contact of type " << std::get<0>(k)
+                               << " at vertex " << std::get<1>(k) << " missed";
+      EXPECT_NEAR(it->second, d, 1e-12);
+      (std::get<0>(k) == kPointFace ? point_face_hits : edge_hits) += 1;
+    }
+    EXPECT_EQ(got.size(), want.size()) << "seed " << seed;
+  }
+  std::printf("[narrow] %lld point-face and %lld edge-edge contacts checked\n",
+              static_cast<long long>(point_face_hits), static_cast<long long>(edge_hits));
+  EXPECT_GT(point_face_hits, 25);
+  EXPECT_GT(edge_hits, 100);
 }
 
 namespace {
