@@ -248,8 +248,9 @@ TEST(Contact, UploadAgainStartsAfresh) {
 
 // The narrow phase's early-outs (ContactTopology::narrow_tris) drop no contact: the records of
 // a stage equal those of the exact tests (point_face, edge_edge) on every feature pair of two
-// bodies, with the same acceptance. Box b is tilted against box a's +x face and every vertex
-// is jittered by up to 0.8 D_DEM, so the features' gaps straddle both thresholds.
+// bodies, with the same acceptance. Box b is tilted against box a's +x face, or pushed 2 D_DEM
+// into it, and every vertex is jittered by up to 0.8 D_DEM, so the features' gaps straddle
+// both thresholds (D_DEM above, the penetration limit below).
 TEST(Contact, NarrowPhaseFindsWhatTestingEveryFeaturePairFinds) {
   const double d_dem = 0.01;
   auto p = make_problem(R"(
@@ -263,8 +264,9 @@ bodies:
   const ContactModel& c = p.model.contact;
   const BodyRange& bb = p.model.bodies[1];
   std::int64_t point_face_hits = 0, edge_hits = 0;
-  for (const auto& [ay, az, seed] : {std::tuple{0.03, 0.05, 1u}, std::tuple{-0.04, 0.02, 2u},
-                                     std::tuple{0.0, 0.0, 3u}}) {
+  for (const auto& [ay, az, dx, seed] :
+       {std::tuple{0.03, 0.05, 0.0, 1u}, std::tuple{-0.04, 0.02, 0.0, 2u},
+        std::tuple{0.0, 0.0, 0.0, 3u}, std::tuple{0.02, -0.03, -0.03, 4u}}) {
     Model m = p.model;
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> jitter(-0.8 * d_dem, 0.8 * d_dem);
@@ -273,8 +275,10 @@ bodies:
       Vec3 q = m.X[i];
       if (i >= bb.v_begin && i < bb.v_end) {
         const Vec3 r = q - o;
-        const Vec3 ry{r.x * std::cos(ay) + r.z * std::sin(ay), r.y, -r.x * std::sin(ay) + r.z * std::cos(ay)};
-        q = o + Vec3{ry.x * std::cos(az) - ry.y * std::sin(az), ry.x * std::sin(az) + ry.y * std::cos(az), ry.z};
+        const Vec3 ry{r.x * std::cos(ay) + r.z * std::sin(ay), r.y,
+                      -r.x * std::sin(ay) + r.z * std::cos(ay)};
+        q = o + Vec3{dx + ry.x * std::cos(az) - ry.y * std::sin(az),
+                     ry.x * std::sin(az) + ry.y * std::cos(az), ry.z};
       }
       m.x[i] = q + Vec3{jitter(rng), jitter(rng), jitter(rng)};
     }
@@ -297,19 +301,23 @@ bodies:
         for (std::int64_t q = c.own_v_off[s1]; q < c.own_v_off[s1 + 1]; ++q) {
           const int A = c.own_v[q];
           const PointFace pf = point_face(m.x[A], m.x[f[0]], m.x[f[1]], m.x[f[2]]);
-          if (pf.inside && pf.s < d_dem && pf.s > -pen) want[{kPointFace, A, f[0], f[1], f[2]}] = pf.s;
+          if (pf.inside && pf.s < d_dem && pf.s > -pen)
+            want[{kPointFace, A, f[0], f[1], f[2]}] = pf.s;
         }
         if (s2 < s1) continue;  // an edge pair once
         for (std::int64_t qa = c.own_e_off[s1]; qa < c.own_e_off[s1 + 1]; ++qa)
           for (std::int64_t qb = c.own_e_off[s2]; qb < c.own_e_off[s2 + 1]; ++qb) {
-            const int e1 = std::min(c.own_e[qa], c.own_e[qb]), e2 = std::max(c.own_e[qa], c.own_e[qb]);
+            const int e1 = std::min(c.own_e[qa], c.own_e[qb]),
+                      e2 = std::max(c.own_e[qa], c.own_e[qb]);
             const auto &ea = c.edges[e1], &eb = c.edges[e2];
             const EdgeEdge ee = edge_edge(m.x[ea[0]], m.x[ea[1]], m.x[eb[0]], m.x[eb[1]],
                                           t.edge_normal(e1), t.edge_normal(e2));
-            if (ee.valid && ee.d < d_dem && ee.d > -d_dem) want[{kEdgeEdge, ea[0], ea[1], eb[0], eb[1]}] = ee.d;
+            if (ee.valid && ee.d < d_dem && ee.d > -d_dem)
+              want[{kEdgeEdge, ea[0], ea[1], eb[0], eb[1]}] = ee.d;
           }
       }
-    for (const ContactRecord& r : stage.records()) got[{r.type, r.v[0], r.v[1], r.v[2], r.v[3]}] = r.d;
+    for (const ContactRecord& r : stage.records())
+      got[{r.type, r.v[0], r.v[1], r.v[2], r.v[3]}] = r.d;
     for (const auto& [k, d] : want) {
       const auto it = got.find(k);
       ASSERT_NE(it, got.end()) << "seed " << seed << ": contact of type " << std::get<0>(k)
