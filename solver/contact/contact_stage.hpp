@@ -151,13 +151,13 @@ struct ContactTopology {
   }
 
   // Contacts between the features owned by triangles a and b: emit(record) for each.
-  // Conservative early-outs skip the exact tests of features that cannot touch: a vertex (or
-  // a whole triangle's vertices) whose distance from the other triangle's plane (this step's
-  // unit normal) is outside the accepted gaps by more than round-off; all edge pairs of two
-  // triangles one of which lies wholly beyond the other's plane by more than D_DEM; two edges
-  // whose midpoints are farther apart than their half-lengths plus D_DEM (a valid edge-edge
-  // touch has |d| = |p - q| < D_DEM). The exact tests decide every other case, so the records
-  // are those of testing everything (Contact.NarrowPhaseFindsWhatTestingEveryFeaturePairFinds).
+  // Three conservative early-outs skip the exact tests of features that cannot touch: a vertex
+  // whose distance from the other triangle's plane (this step's unit normal) is outside the
+  // accepted gaps by more than round-off; all edge pairs of two triangles one of which lies
+  // wholly beyond the other's plane by more than D_DEM; and two edges whose midpoints are
+  // farther apart than their half-lengths plus D_DEM (a valid edge-edge touch has |d| =
+  // |p - q| < D_DEM). The exact tests decide every other case, so the records are those of
+  // testing everything (Contact.NarrowPhaseFindsWhatTestingEveryFeaturePairFinds).
   // On an MPI rank, a free vertex's point-face tests run on its owner only, unless the faces'
   // body leads (face_leads: then on that body's rank), and an edge pair's on its anchor's owner
   // (anchor_slot); a fixed vertex's run wherever both sides are held (the duplicate filter
@@ -179,19 +179,6 @@ struct ContactTopology {
     const bool test_anchor = !eval.all && !all_owned;
     const Vec3 na = tri_n[a], nb = tri_n[b];
     const double tol = 1e-9 * pen;  // >> the round-off of a plane distance, << any gap
-    // Whole triangles beyond the other's plane: a's vertices against b's (ga), b's against a's
-    // (gb). A side whose vertices all lie outside the accepted gaps gives no point-face record;
-    // and an edge lies in its triangle's plane, while an edge-edge touch is two points of the
-    // edges within D_DEM (|d| = |p - q|): when either triangle lies farther than that from the
-    // other's plane, none of their edge pairs touches (3 in 4 candidate triangle pairs of the
-    // resting cube block, whose side faces are 1.5 D_DEM apart).
-    bool faces_apart[2], edges_apart;
-    {
-      const PlaneGaps ga = plane_gaps(pb[0], nb, pa), gb = plane_gaps(pa[0], na, pb);
-      faces_apart[0] = ga.beyond(d_dem + tol, pen + tol);
-      faces_apart[1] = gb.beyond(d_dem + tol, pen + tol);
-      edges_apart = ga.beyond(d_dem + tol, d_dem + tol) || gb.beyond(d_dem + tol, d_dem + tol);
-    }
     // Point-face: vertex A of side `side` on the other side's triangle s2 (points p2, normal n2).
     auto point_on_face = [&](int side, int A, std::int64_t s2, const Vec3* p2, const Vec3& n2) {
       const Vec3 xa = x[A];
@@ -218,7 +205,6 @@ struct ContactTopology {
     };
     // Both ways; a free vertex's touches are tested on its owner.
     for (int side = 0; side < 2; ++side) {
-      if (faces_apart[side]) continue;
       const std::int64_t s1 = side == 0 ? a : b, s2 = side == 0 ? b : a;
       const Vec3* p2 = side == 0 ? pb : pa;
       const Vec3 n2 = side == 0 ? nb : na;
@@ -235,7 +221,7 @@ struct ContactTopology {
     // narrow phase 9 % slower on an H200.
     if (test_anchor && !same) {
       const int l = eval.leading_body(ba, bb);
-      if (l >= 0 && eval.whole_here(l) && !faces_apart[l == bb ? 0 : 1]) {
+      if (l >= 0 && eval.whole_here(l)) {
         const int side = l == bb ? 0 : 1;
         const std::int64_t s1 = side == 0 ? a : b, s2 = side == 0 ? b : a;
         const Vec3 n2 = side == 0 ? nb : na;
@@ -243,8 +229,12 @@ struct ContactTopology {
           if (eval.ghost(own_v[q])) point_on_face(side, own_v[q], s2, side == 0 ? pb : pa, n2);
       }
     }
-    // Edge-edge.
-    if (edges_apart) return;
+    // Edge-edge. An edge lies in the plane of its triangle, and an edge-edge touch is two
+    // points of the edges within D_DEM (|d| = |p - q|): when either triangle's vertices all lie
+    // farther than that from the other's plane, on one side, none of their edge pairs touches
+    // (3 in 4 candidate triangle pairs of the resting cube block, the side faces 1.5 D_DEM apart).
+    if (beyond_plane(pa[0], na, pb, d_dem + tol) || beyond_plane(pb[0], nb, pa, d_dem + tol))
+      return;
     for (std::int64_t qa = own_e_off[a]; qa < own_e_off[a + 1]; ++qa)
       for (std::int64_t qb = own_e_off[b]; qb < own_e_off[b + 1]; ++qb) {
         const int ea = own_e[qa], eb = own_e[qb];

@@ -56,20 +56,12 @@ QDEMSPH_HD PointFace point_face(Vec3 a, Vec3 v0, Vec3 v1, Vec3 v2) {
   return r;
 }
 
-// The signed distances of the points q[0..2] from the plane through p with unit normal n.
-struct PlaneGaps {
-  double s[3];
-  // Whether all three lie farther than `above` on the outward side, or all farther than `below`
-  // behind the plane (false for a NaN or a zero n): then so does every point of the triangle
-  // they span, and of its edges.
-  QDEMSPH_HD bool beyond(double above, double below) const {
-    return (s[0] > above && s[1] > above && s[2] > above) ||
-           (s[0] < -below && s[1] < -below && s[2] < -below);
-  }
-};
-
-QDEMSPH_HD PlaneGaps plane_gaps(Vec3 p, Vec3 n, const Vec3* q) {
-  return {{dot(q[0] - p, n), dot(q[1] - p, n), dot(q[2] - p, n)}};
+// Whether the points q[0..2] all lie farther than `gap` from the plane through p with unit
+// normal n, on one side (false for a zero n or NaN). Every point of the triangle they span, and
+// of its edges, is then farther than `gap` from every point of that plane.
+QDEMSPH_HD bool beyond_plane(Vec3 p, Vec3 n, const Vec3* q, double gap) {
+  const double s0 = dot(q[0] - p, n), s1 = dot(q[1] - p, n), s2 = dot(q[2] - p, n);
+  return (s0 > gap && s1 > gap && s2 > gap) || (s0 < -gap && s1 < -gap && s2 < -gap);
 }
 
 struct EdgeEdge {

@@ -50,23 +50,19 @@ TEST(PointFace, VertexOnEdgeAndVertexOnVertex) {
   EXPECT_NEAR(v.w[0], 1.0, 1e-15);
 }
 
-TEST(PlaneGaps, WholeTrianglesBeyondAPlane) {
+TEST(BeyondPlane, AllThreePointsOnOneSideFartherThanTheGap) {
   const Vec3 p{0, 0, 1}, n{0, 0, 1};  // the plane z = 1
   const Vec3 above[3] = {{0, 0, 1.2}, {5, -3, 1.3}, {-2, 7, 1.25}};
-  const PlaneGaps g = plane_gaps(p, n, above);
-  EXPECT_NEAR(g.s[0], 0.2, 1e-15);
-  EXPECT_NEAR(g.s[1], 0.3, 1e-15);
-  EXPECT_NEAR(g.s[2], 0.25, 1e-15);
-  EXPECT_TRUE(g.beyond(0.1, 10));
-  EXPECT_FALSE(g.beyond(0.21, 0));  // one point is only 0.2 away
+  EXPECT_TRUE(beyond_plane(p, n, above, 0.1));
+  EXPECT_FALSE(beyond_plane(p, n, above, 0.2));  // one point is only 0.2 away
   const Vec3 below[3] = {{0, 0, 0.7}, {1, 1, 0.5}, {2, 0, 0.6}};
-  EXPECT_TRUE(plane_gaps(p, n, below).beyond(10, 0.25));
-  EXPECT_FALSE(plane_gaps(p, n, below).beyond(0, 0.35));  // one point is only 0.3 away
+  EXPECT_TRUE(beyond_plane(p, n, below, 0.25));
+  EXPECT_FALSE(beyond_plane(p, n, below, 0.35));  // one point is only 0.3 away
   const Vec3 straddling[3] = {{0, 0, 1.5}, {1, 1, 0.5}, {2, 0, 1.5}};
-  EXPECT_FALSE(plane_gaps(p, n, straddling).beyond(0.1, 0.1));
-  EXPECT_FALSE(plane_gaps(p, Vec3{}, above).beyond(0.1, 0.1));  // a degenerate triangle's zero n
-  const Vec3 nan[3] = {{0, 0, 2}, {0, 0, std::nan("")}, {0, 0, 2}};
-  EXPECT_FALSE(plane_gaps(p, n, nan).beyond(0.1, 0.1));
+  EXPECT_FALSE(beyond_plane(p, n, straddling, 0.1));
+  EXPECT_FALSE(beyond_plane(p, Vec3{}, above, 0.1));  // a degenerate triangle's zero normal
+  const Vec3 nan[3] = {{0, 0, std::nan("")}, {0, 0, 2}, {0, 0, 2}};
+  EXPECT_FALSE(beyond_plane(p, n, nan, 0.1));
 }
 
 TEST(EdgeEdge, HandComputedCrossing) {
