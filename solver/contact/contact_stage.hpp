@@ -704,8 +704,8 @@ class ContactStage {
            ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() + pr_ref_.bytes() +
            cells_.bytes() + pairs_.bytes() + vgid_.bytes() + edge_anchor_.bytes() +
            rec_tmp_.bytes() + in_.bytes() + base_.bytes() + ekey_.bytes() + share_flag_.bytes() +
-           out_.bytes() + keep_.bytes() + route_rank_.bytes() + route_index_.bytes() +
-           tri_gid_.bytes() + edge_gid_.bytes();
+           out_.bytes() + keep_.bytes() + tfirst_.bytes() + tsecond_.bytes() + route_rank_.bytes() +
+           route_index_.bytes() + tri_gid_.bytes() + edge_gid_.bytes();
   }
 
   ContactTopology topology() const {
@@ -840,7 +840,7 @@ class ContactStage {
     // MPI rank a pair of two free primitives without an owned vertex is another rank's
     // (every record it could give is anchored elsewhere, Evaluator), and so is a pair of two
     // bodies of which one leads on another rank (face_leads: all their records are its).
-    return pairs_.build(
+    const std::int64_t n = pairs_.build(
         cells_, cc, rr, gap, npf_, QDEMSPH_LAMBDA(std::int64_t i, std::int64_t j)->bool {
           const int bi = pb[i], bj = pb[j];
           if (fixed[bi] && fixed[bj]) return false;
@@ -864,6 +864,40 @@ class ContactStage {
               if (pvv[b * np + j] == va) return false;
           }
           return true;
+        });
+    if (ghosts) order_border_last(n);
+    return n;
+  }
+
+  // On a rank with ghosts, the candidate pairs in the narrow phase's thread order (tfirst_,
+  // tsecond_): those whose primitives' vertices are all owned first, the pairs across the
+  // border (another rank's or a fixed body's vertex) last, each group in the list's order. A
+  // border pair runs the anchor and leading-body tests that the others skip, and spread
+  // through the list it held up the warps it fell in.
+  void order_border_last(std::int64_t n) {
+    fit_count(tfirst_, n);
+    fit_count(tsecond_, n);
+    fit_count(keep_, n + 1);
+    const std::int64_t np = np_, nfv = nfv_;
+    const auto pv = prim_v_.cview();
+    const auto fst = pairs_.first(), sec = pairs_.second();
+    const auto inner = keep_.view();
+    for_each(
+        Exec{}, n, QDEMSPH_LAMBDA(std::int64_t q) {
+          bool owned = true;
+          for (int a = 0; a < 8 && owned; ++a) {
+            const int v = pv[(a & 3) * np + (a < 4 ? fst[q] : sec[q])];
+            owned = v < nfv;  // padding (-1) included
+          }
+          inner[q] = owned ? 1 : 0;
+        });
+    const std::int64_t ninner = exclusive_scan(Exec{}, inner, n);
+    const auto tf = tfirst_.view(), ts = tsecond_.view();
+    for_each(
+        Exec{}, n, QDEMSPH_LAMBDA(std::int64_t q) {
+          const std::int64_t k = inner[q + 1] > inner[q] ? inner[q] : ninner + q - inner[q];
+          tf[k] = fst[q];
+          ts[k] = sec[q];
         });
   }
 
@@ -889,8 +923,8 @@ class ContactStage {
     }
     const ContactTopology topo = topology();
     const std::int64_t npair = pairs_.size(), nwv = nwv_, nw = nw_;
-    const auto fst = pairs_.first();
-    const auto sec = pairs_.second();
+    const auto fst = ghosts_ ? tfirst_.cview() : pairs_.first();
+    const auto sec = ghosts_ ? tsecond_.cview() : pairs_.second();
     const auto pto = prim_tri_off_.cview();
     const auto pt = prim_tri_.cview();
     const auto wv = wall_v_.cview();
@@ -1414,7 +1448,8 @@ class ContactStage {
   DeviceMark shares_mark_;                // after the shares' compaction (shares, read_marked)
   StagingBytes share_count_;              // their count, copied with them (queue_shares)
   Buffer<int> keep_{S};
-  bool timed_ = false;  // the last evaluation was a dynamic step
+  Buffer<int> tfirst_{S}, tsecond_{S};  // the narrow phase's pair order on a rank with ghosts
+  bool timed_ = false;                  // the last evaluation was a dynamic step
   Buffer<int> ent_v_{S}, vcnt_{S}, vcur_{S}, vent_{S}, count_{S};
   Vec3Buffer ent_f_{S};
   Buffer<std::uint64_t> pk1_{S}, pk2_{S}, nk1_{S}, nk2_{S};
