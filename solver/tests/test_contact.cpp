@@ -293,10 +293,10 @@ bodies:
     // (type, vertices) -> d of every contact, by the exact tests alone.
     std::map<std::tuple<int, int, int, int, int>, double> want, got;
     const auto ntri = static_cast<std::int64_t>(c.tri_v.size());
+    const double pen = d_dem + 0.5 * std::min(t.body_h[0], t.body_h[1]);  // deepest accepted
     for (std::int64_t s1 = 0; s1 < ntri; ++s1)
       for (std::int64_t s2 = 0; s2 < ntri; ++s2) {
         if (c.tri_body[s1] == c.tri_body[s2]) continue;
-        const double pen = d_dem + 0.5 * std::min(t.body_h[0], t.body_h[1]);
         const auto& f = c.tri_v[s2];
         for (std::int64_t q = c.own_v_off[s1]; q < c.own_v_off[s1 + 1]; ++q) {
           const int A = c.own_v[q];
