@@ -1447,7 +1447,7 @@ class ContactStage {
   bool local_sorted_ = false;             // gather_local ran for the last evaluation
   DeviceMark shares_mark_;                // after the shares' compaction (shares, read_marked)
   StagingBytes share_count_;              // their count, copied with them (queue_shares)
-  Buffer<int> keep_{S};
+  Buffer<int> keep_{S};                 // flags and their scan (keep_evaluated, order_border_last)
   Buffer<int> tfirst_{S}, tsecond_{S};  // the narrow phase's pair order on a rank with ghosts
   bool timed_ = false;                  // the last evaluation was a dynamic step
   Buffer<int> ent_v_{S}, vcnt_{S}, vcur_{S}, vent_{S}, count_{S};

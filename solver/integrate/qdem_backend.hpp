@@ -584,11 +584,7 @@ class QdemBackend final : public Backend {
   // launch and one read of x fewer at the start of a distributed step, where the device waits
   // for the host's launches.
   void drift_and_queue_max_moved(double h) override {
-    if (xmark_.size() != nv_) {
-      drift(h);
-      queue_max_moved();
-      return;
-    }
+    if (xmark_.size() != nv_) return Backend::drift_and_queue_max_moved(h);
     moved_.resize(sizeof(double));
     const auto v = v_.cview();
     const auto x = x_.view();
