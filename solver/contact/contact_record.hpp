@@ -30,16 +30,18 @@ struct ContactRecord {
   std::int32_t active = 1;
 };
 
-QDEMSPH_HD bool key_less(const ContactRecord& a, const ContactRecord& b) {
-  return a.k1 != b.k1 ? a.k1 < b.k1 : a.k2 < b.k2;
-}
-
 QDEMSPH_HD std::uint64_t contact_key1(int type, std::uint64_t id1) {
   return (static_cast<std::uint64_t>(type) << 60) | id1;
 }
 
 // The id1 bits of k1.
 inline constexpr std::uint64_t kIdMask = (std::uint64_t{1} << 60) - 1;
+
+// The key order (k1, then k2) in one 64-bit key, for sorting: the type, then id1 in its b1 bits,
+// then k2 in its b2 bits, where id1 < 2^b1, k2 < 2^b2 and b1 + b2 <= 62 (b12 = b1 + b2).
+QDEMSPH_HD std::uint64_t sort_key(const ContactRecord& r, int b2, int b12) {
+  return (r.k1 >> 60) << b12 | (r.k1 & kIdMask) << b2 | r.k2;
+}
 
 // A key of a rank's model in global feature ids: vertices are keyed by global id already
 // (ContactTopology::vgid), edges and triangles are numbered per model (in global order) and

@@ -3,9 +3,11 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <numeric>
 #include <random>
 #include <tuple>
 
@@ -244,6 +246,50 @@ TEST(Contact, UploadAgainStartsAfresh) {
   EXPECT_EQ(ea.total(), eb.total());
   EXPECT_EQ(ea.contact_dissipated, eb.contact_dissipated);
   EXPECT_EQ(fresh.backend->stage_seconds().size(), used.backend->stage_seconds().size());
+}
+
+// The records' packed sort key (sort_key) orders as the key pair (k1, then k2), at the widths
+// of a small model and at the widest (31-bit ids), and the host's sorted_order sorts by it.
+TEST(Contact, SortKeyOrdersAsTheKeyPair) {
+  std::mt19937_64 rng(7);
+  for (const auto [b1, b2] : {std::pair{21, 18}, std::pair{31, 31}, std::pair{1, 1}}) {
+    const int b12 = b1 + b2;
+    std::vector<ContactRecord> r(2000);
+    for (ContactRecord& c : r) {
+      // Few distinct values in each field, so that ties in k1 are common.
+      const auto pick = [&](int bits) {
+        return (rng() % 5) * ((std::uint64_t{1} << bits) - 1) / 4;
+      };
+      c.k1 = contact_key1(static_cast<int>(rng() % 3), pick(b1));
+      c.k2 = pick(b2);
+    }
+    for (std::size_t i = 0; i + 1 < r.size(); ++i) {
+      const ContactRecord &a = r[i], &b = r[i + 1];
+      const bool less = a.k1 != b.k1 ? a.k1 < b.k1 : a.k2 < b.k2;
+      const bool same = a.k1 == b.k1 && a.k2 == b.k2;
+      ASSERT_EQ(sort_key(a, b2, b12) < sort_key(b, b2, b12), less) << b1 << " " << b2 << " " << i;
+      ASSERT_EQ(sort_key(a, b2, b12) == sort_key(b, b2, b12), same) << b1 << " " << b2 << " " << i;
+    }
+  }
+  const std::int64_t n = 1000;
+  Buffer<std::uint64_t> keys(Space::Host);
+  Buffer<std::int32_t> order(Space::Host);
+  keys.resize(2 * n);
+  order.resize(2 * n);
+  std::vector<std::uint64_t> perm(n);
+  std::iota(perm.begin(), perm.end(), std::uint64_t{0});
+  std::shuffle(perm.begin(), perm.end(), rng);
+  for (std::int64_t i = 0; i < n; ++i) {
+    keys.view()[i] = perm[i] << 31 | (rng() & 0x7fffffff);  // 41 bits, unique
+    order.view()[i] = static_cast<std::int32_t>(i);
+  }
+  const std::int32_t* o = sorted_order(HostExec{}, keys.view(), order.view(), n, 41);
+  std::vector<bool> seen(n, false);
+  for (std::int64_t k = 0; k < n; ++k) {
+    ASSERT_FALSE(seen[o[k]]);
+    seen[o[k]] = true;
+    if (k > 0) EXPECT_LT(keys.view()[o[k - 1]], keys.view()[o[k]]);
+  }
 }
 
 // The narrow phase's early-outs (ContactTopology::narrow_tris) drop no contact: the records of
