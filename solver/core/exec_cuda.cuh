@@ -4,12 +4,14 @@
 //  - for_each(CudaExec, n, f): a grid-stride kernel, 256 threads a block, at most
 //    32 blocks per SM (4 waves of 8 resident blocks), f(i) once for every i in [0, n).
 //    Asynchronous: the host does not wait; exec_sync() waits and reports kernel faults.
-//  - reduce_sum / reduce_max: two levels. Level 1: B = min(ceil(n / 256), 1024) blocks,
-//    thread j of block b folds i = b*256 + j, + 256 B, ... in increasing order, then a CUB
-//    BlockReduce (fixed tree for a fixed block size) gives one partial per block. Level 2:
-//    one block folds the B partials the same way. B depends on n only, so the result has
-//    the same bits on every run and on every GPU for a given n (it differs from the host's
-//    OpenMP order by round-off). The result returns to the host (a synchronising copy).
+//  - reduce_sum / reduce_max: two levels in one kernel. Level 1: B = min(ceil(n / 256), 1024)
+//    blocks, thread j of block b folds i = b*256 + j, + 256 B, ... in increasing order, then a
+//    CUB BlockReduce (fixed tree for a fixed block size) gives one partial per block. Level 2:
+//    the last block to finish folds the B partials the same way. B depends on n only, so the
+//    result has the same bits on every run and on every GPU for a given n (it differs from the
+//    host's OpenMP order by round-off). The result returns to the host (a synchronising copy).
+//  - Work is queued on cuda_stream(): the default stream, or the side stream inside a
+//    SideQueue (memory.hpp).
 // Kernel launch errors and asynchronous faults become std::runtime_error naming the call.
 #pragma once
 
@@ -37,11 +39,13 @@ struct CudaExec {
     if (qdemsph_err_ != cudaSuccess) ::qdemsph::cuda_fail(qdemsph_err_, what, __FILE__, __LINE__); \
   } while (0)
 
-// memory_cuda.cu: the grid cap for for_each (32 blocks per SM of the current device), a
-// device scratch of cuda_detail::kMaxPartials + 1 doubles for the reductions, and a grow-only
-// device scratch of at least `bytes` for CUB's temporary storage (sorts, scans; one user at a
-// time: every call is ordered on the default stream).
+// memory_cuda.cu: the grid cap for for_each (32 blocks per SM of the current device), the
+// stream this thread queues on, a device scratch for the reductions of that stream
+// (cuda_detail::kMaxPartials partials, the result, the count of finished blocks), and a
+// grow-only device scratch of at least `bytes` for CUB's temporary storage (sorts, scans; one
+// user at a time: every call is ordered on the default stream).
 int cuda_grid_cap();
+cudaStream_t cuda_stream();
 double* cuda_reduce_scratch();
 void* cuda_temp_storage(std::size_t bytes);
 
@@ -69,9 +73,11 @@ struct MaxOp {
   }
 };
 
+// Both levels: each block writes its partial and counts itself done; the last one folds the
+// partials (a launch fewer than a second kernel) and resets the count (atomicInc wraps to 0).
 template <class F, class Op>
-__global__ void __launch_bounds__(kBlock)
-    reduce_kernel(std::int64_t n, F f, Op op, double init, double* partial) {
+__global__ void __launch_bounds__(kBlock) reduce_kernel(std::int64_t n, F f, Op op, double init,
+                                                        double* partial, unsigned* done) {
   double acc = init;
   const std::int64_t stride = static_cast<std::int64_t>(kBlock) * gridDim.x;
   for (std::int64_t i = static_cast<std::int64_t>(blockIdx.x) * kBlock + threadIdx.x; i < n;
@@ -79,31 +85,31 @@ __global__ void __launch_bounds__(kBlock)
     acc = op(acc, f(i));
   using BlockReduce = cub::BlockReduce<double, kBlock>;
   __shared__ typename BlockReduce::TempStorage tmp;
+  __shared__ bool last;
   const double r = BlockReduce(tmp).Reduce(acc, op);
-  if (threadIdx.x == 0) partial[blockIdx.x] = r;
+  if (threadIdx.x == 0) {
+    partial[blockIdx.x] = r;
+    __threadfence();  // the partial is visible before the count says so
+    last = atomicInc(done, gridDim.x - 1) == gridDim.x - 1;
+  }
+  __syncthreads();
+  if (!last) return;
+  acc = init;
+  for (unsigned i = threadIdx.x; i < gridDim.x; i += kBlock) acc = op(acc, __ldcg(partial + i));
+  __syncthreads();  // tmp is used again
+  const double s = BlockReduce(tmp).Reduce(acc, op);
+  if (threadIdx.x == 0) partial[kMaxPartials] = s;
 }
 
-template <class Op>
-__global__ void __launch_bounds__(kBlock)
-    reduce_finish_kernel(int m, Op op, double init, const double* partial, double* out) {
-  double acc = init;
-  for (int i = threadIdx.x; i < m; i += kBlock) acc = op(acc, partial[i]);
-  using BlockReduce = cub::BlockReduce<double, kBlock>;
-  __shared__ typename BlockReduce::TempStorage tmp;
-  const double r = BlockReduce(tmp).Reduce(acc, op);
-  if (threadIdx.x == 0) *out = r;
-}
-
-// Queues the two levels; the result lands in the device slot returned (n > 0).
+// Queues the reduction; the result lands in the device slot returned (n > 0).
 template <class F, class Op>
 const double* reduce_queue(std::int64_t n, F f, Op op, double init) {
   const std::int64_t want = (n + kBlock - 1) / kBlock;
   const int blocks = static_cast<int>(want < kMaxPartials ? want : kMaxPartials);
   double* scratch = cuda_reduce_scratch();
-  reduce_kernel<<<blocks, kBlock>>>(n, f, op, init, scratch);
+  reduce_kernel<<<blocks, kBlock, 0, cuda_stream()>>>(
+      n, f, op, init, scratch, reinterpret_cast<unsigned*>(scratch + kMaxPartials + 1));
   QDEMSPH_CUDA_CHECK(cudaGetLastError(), "reduce_kernel launch");
-  reduce_finish_kernel<<<1, kBlock>>>(blocks, op, init, scratch, scratch + kMaxPartials);
-  QDEMSPH_CUDA_CHECK(cudaGetLastError(), "reduce_finish_kernel launch");
   return scratch + kMaxPartials;
 }
 
@@ -112,7 +118,9 @@ double reduce(std::int64_t n, F f, Op op, double init) {
   if (n <= 0) return init;
   const double* r = reduce_queue(n, f, op, init);
   double h = init;
-  QDEMSPH_CUDA_CHECK(cudaMemcpy(&h, r, sizeof(double), cudaMemcpyDeviceToHost),
+  QDEMSPH_CUDA_CHECK(cudaMemcpyAsync(&h, r, sizeof(double), cudaMemcpyDeviceToHost, cuda_stream()),
+                     "reduction result copy");
+  QDEMSPH_CUDA_CHECK(cudaStreamSynchronize(cuda_stream()),
                      "reduction result copy (an earlier kernel may have faulted)");
   return h;
 }
@@ -125,7 +133,7 @@ void for_each(CudaExec, std::int64_t n, F f, MinBlocks<B> = {}) {
   const std::int64_t want = (n + cuda_detail::kBlock - 1) / cuda_detail::kBlock;
   const std::int64_t cap = cuda_grid_cap();
   const int blocks = static_cast<int>(want < cap ? want : cap);
-  cuda_detail::for_each_kernel<B><<<blocks, cuda_detail::kBlock>>>(n, f);
+  cuda_detail::for_each_kernel<B><<<blocks, cuda_detail::kBlock, 0, cuda_stream()>>>(n, f);
   QDEMSPH_CUDA_CHECK(cudaGetLastError(), "for_each kernel launch");
 }
 

@@ -29,6 +29,10 @@ void cuda_copy_async(void*, const void*, std::size_t) { no_cuda(); }
 void cuda_copy_wait() {}
 void cuda_copy_fence() { no_cuda(); }
 void cuda_copy_queued(void*, const void*, std::size_t) { no_cuda(); }
+SideQueue::SideQueue(bool on) : on_(on) {
+  if (on_) no_cuda();
+}
+SideQueue::~SideQueue() = default;
 DeviceMark::~DeviceMark() = default;
 void DeviceMark::record() { no_cuda(); }
 void DeviceMark::wait() {}

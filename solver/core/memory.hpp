@@ -45,11 +45,13 @@ void cuda_copy_wait();
 // (an event between the streams; the host does not wait).
 void cuda_copy_fence();
 // A copy between page-locked host memory and this process's device memory (either way), queued
-// on the default stream: after the kernels queued so far, before those queued later. It returns
-// at once; the bytes are there once a DeviceMark recorded after it has been waited for.
+// on the default stream (the side stream in a SideQueue): after the kernels queued so far,
+// before those queued later. It returns at once; the bytes are there once a DeviceMark recorded
+// after it has been waited for.
 void cuda_copy_queued(void* dst, const void* src, std::size_t bytes);
-// A point in this process's default-stream work (a CUDA event): record() after the work queued
-// so far, wait() returns once that work is done while work queued later runs on. wait() before
+// A point in this process's default-stream work (a CUDA event; the side stream's in a
+// SideQueue): record() after the work queued so far, wait() returns once that work is done
+// while work queued later runs on. wait() before
 // any record() returns at once. Only for device work: record() makes the process's GPU context.
 class DeviceMark {
  public:
@@ -63,6 +65,23 @@ class DeviceMark {
  private:
   void* event_ = nullptr;
   bool pending_ = false;
+};
+// Device work beside the default stream's: while a SideQueue lives, this thread's for_each
+// kernels, reductions, cuda_copy_queued, cuda_zero (Buffer::zero) and DeviceMark::record go to
+// this process's side stream (CUDA sorts and scans do not: they share one scratch), which
+// starts after the default stream's work queued before the scope. The default stream does not
+// wait for the side's work: a DeviceMark recorded inside says when it is done. For short work
+// that the step's next kernels do not read (a halo's packing, the contact shares' compaction),
+// off the default stream's path. `on` false, or no CUDA: nothing changes. Not nested.
+class SideQueue {
+ public:
+  explicit SideQueue(bool on);
+  ~SideQueue();
+  SideQueue(const SideQueue&) = delete;
+  SideQueue& operator=(const SideQueue&) = delete;
+
+ private:
+  bool on_;
 };
 // CUDA IPC between processes of one node: the handle of this process's IpcDeviceBytes, and
 // another process's mapped into this one by its handle (a device pointer here; peer copies

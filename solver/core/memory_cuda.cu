@@ -305,8 +305,42 @@ void cuda_copy_fence() {
 }
 
 void cuda_copy_queued(void* dst, const void* src, std::size_t bytes) {
-  QDEMSPH_CUDA_CHECK(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDefault),
+  QDEMSPH_CUDA_CHECK(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDefault, cuda_stream()),
                      "cudaMemcpyAsync (queued)");
+}
+
+namespace {
+thread_local cudaStream_t queue_stream = 0;
+cudaStream_t side_stream() {
+  static const cudaStream_t s = [] {
+    use_preferred_device();
+    cudaStream_t t = nullptr;
+    QDEMSPH_CUDA_CHECK(cudaStreamCreateWithFlags(&t, cudaStreamNonBlocking),
+                       "cudaStreamCreateWithFlags (side)");
+    return t;
+  }();
+  return s;
+}
+}  // namespace
+
+cudaStream_t cuda_stream() { return queue_stream; }
+
+SideQueue::SideQueue(bool on) : on_(on) {
+  if (!on_) return;
+  if (queue_stream != 0) throw std::logic_error("SideQueue inside a SideQueue");
+  static const cudaEvent_t fork = [] {
+    use_preferred_device();
+    cudaEvent_t t = nullptr;
+    QDEMSPH_CUDA_CHECK(cudaEventCreateWithFlags(&t, cudaEventDisableTiming), "cudaEventCreate");
+    return t;
+  }();
+  QDEMSPH_CUDA_CHECK(cudaEventRecord(fork, 0), "cudaEventRecord (side queue)");
+  QDEMSPH_CUDA_CHECK(cudaStreamWaitEvent(side_stream(), fork, 0), "cudaStreamWaitEvent (side)");
+  queue_stream = side_stream();
+}
+
+SideQueue::~SideQueue() {
+  if (on_) queue_stream = 0;
 }
 
 DeviceMark::~DeviceMark() {
@@ -320,7 +354,8 @@ void DeviceMark::record() {
     QDEMSPH_CUDA_CHECK(cudaEventCreateWithFlags(&e, cudaEventDisableTiming), "cudaEventCreate");
     event_ = e;
   }
-  QDEMSPH_CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(event_)), "cudaEventRecord");
+  QDEMSPH_CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(event_), cuda_stream()),
+                     "cudaEventRecord");
   pending_ = true;
 }
 
@@ -355,7 +390,7 @@ void cuda_ipc_close(void* p) noexcept {
 }
 
 void cuda_zero(void* p, std::size_t bytes) {
-  QDEMSPH_CUDA_CHECK(cudaMemset(p, 0, bytes), "cudaMemset");
+  QDEMSPH_CUDA_CHECK(cudaMemsetAsync(p, 0, bytes, cuda_stream()), "cudaMemsetAsync");
 }
 
 template <class T>
@@ -417,11 +452,17 @@ void* cuda_temp_storage(std::size_t bytes) {
   return s.p;
 }
 
+// One scratch a stream (default, side): kMaxPartials partials, the result, the count of finished
+// blocks (zero between reductions: the last block resets it).
 double* cuda_reduce_scratch() {
-  static ReduceScratch s;
-  if (!s.p)
-    s.p = static_cast<double*>(cuda_alloc(sizeof(double) * (cuda_detail::kMaxPartials + 1)));
-  return s.p;
+  static ReduceScratch s[2];
+  ReduceScratch& r = s[cuda_stream() == 0 ? 0 : 1];
+  if (!r.p) {
+    const std::size_t bytes = sizeof(double) * (cuda_detail::kMaxPartials + 2);
+    r.p = static_cast<double*>(cuda_alloc(bytes));
+    QDEMSPH_CUDA_CHECK(cudaMemset(r.p, 0, bytes), "cudaMemset (reduction scratch)");
+  }
+  return r.p;
 }
 
 GpuInfo gpu_info() {

@@ -907,13 +907,14 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     local_->queue_max_moved();
   }
 
-  // x, v of the owned vertices other ranks need, packed (on a GPU, queued): what start_halo
-  // sends.
+  // x, v of the owned vertices other ranks need, packed (on a GPU, queued on the side stream,
+  // beside the interior tets, which no longer wait for it): what start_halo sends.
   void queue_pack(PhaseTimers& tm) {
     CommEngine& e = halo_->engine();
     auto s = tm.launch("halo");
     auto s1 = tm.launch("halo.xv");
     auto buf = e.packed_send_buffer(6 * sizeof(double));
+    SideQueue side(device_halo());
     local_->pack_halo(reinterpret_cast<double*>(buf.data()), e.packed_space());
     e.mark_packed();
   }
