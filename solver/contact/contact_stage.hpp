@@ -522,12 +522,9 @@ class ContactStage {
   // The last evaluation's force shares of free vertices held but not owned (an MPI rank's
   // ghosts; none on one process), as they travel (ContactShare: the owner's rank and index,
   // global keys), in no fixed order; valid until the next call. The force law compacted them
-  // and queued their count's copy (queue_shares). Once the host has read them (into page-locked
-  // memory, while the device runs the element gather queued before), each vertex's own entries
-  // are sorted and summed (gather_local): on a GPU that runs while the ranks exchange the
-  // shares. A vertex no other rank holds gets its sum in f now; add_forces merges the others'
-  // with what arrives.
-  std::span<const ContactShare> shares(Vec3View f) {
+  // and queued their count's copy (queue_shares); the host reads them into page-locked memory
+  // while the device runs the element gather queued before.
+  std::span<const ContactShare> shares() {
     if (!ghosts_) return {};
     int count = 0;
     if constexpr (S == Space::Cuda) {
@@ -547,12 +544,18 @@ class ContactStage {
       fit_count(share_read_, static_cast<std::int64_t>(bytes));
       read_marked(share_read_.data(), out_.cview().p, bytes);
     }
-    gather_local(f);
     if constexpr (S == Space::Cuda)
       return {reinterpret_cast<const ContactShare*>(share_read_.data()),
               static_cast<std::size_t>(n)};
     else
       return {out_.cview().p, static_cast<std::size_t>(n)};
+  }
+
+  // Each vertex's own entries sorted and summed (gather_local), queued: on a GPU rank they run
+  // while the ranks exchange the shares. A vertex no other rank holds gets its sum in f now;
+  // add_forces merges the others' with what arrives (and queues these sums if not done yet).
+  void queue_sums(Vec3View f) {
+    if (!local_sorted_) gather_local(f);
   }
 
   // f[i] += contact force on vertex i, for free vertices i < n_free_vertices, of the last
@@ -562,13 +565,10 @@ class ContactStage {
   void add_forces(Vec3View f, std::span<const ContactShare> in = {}) {
     PhaseTimers scratch;
     auto scope = (timed_ ? timers_ : scratch).scope("contact.force");
-    if (!ghosts_) {
-      if (!in.empty()) throw std::logic_error("contact shares for a model without ghosts");
-      gather_local(f);
-      return;
-    }
+    if (!ghosts_ && !in.empty())
+      throw std::logic_error("contact shares for a model without ghosts");
     if (!local_sorted_) gather_local(f);
-    merge_shares(f, in);
+    if (ghosts_) merge_shares(f, in);
     local_sorted_ = false;
   }
 

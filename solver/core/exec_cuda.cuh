@@ -76,8 +76,8 @@ struct MaxOp {
 // Both levels: each block writes its partial and counts itself done; the last one folds the
 // partials (a launch fewer than a second kernel) and resets the count (atomicInc wraps to 0).
 template <class F, class Op>
-__global__ void __launch_bounds__(kBlock) reduce_kernel(std::int64_t n, F f, Op op, double init,
-                                                        double* partial, unsigned* done) {
+__global__ void __launch_bounds__(kBlock)
+    reduce_kernel(std::int64_t n, F f, Op op, double init, double* partial, unsigned* done) {
   double acc = init;
   const std::int64_t stride = static_cast<std::int64_t>(kBlock) * gridDim.x;
   for (std::int64_t i = static_cast<std::int64_t>(blockIdx.x) * kBlock + threadIdx.x; i < n;

@@ -136,9 +136,11 @@ class Backend {
                               bool undoable) = 0;
   virtual void undo_dissipation() = 0;
   virtual void assemble_forces(double dt_dissipation, double mass_damping) = 0;
-  // The shares as they travel (ContactShare; valid until the next call), and those that
-  // arrived for this rank's vertices. set_share_routes says where they go (a layout's).
+  // The shares as they travel (ContactShare; valid until the next call), the sums of this
+  // rank's own contact entries queued (else add_contact_forces queues them), and the shares
+  // that arrived for this rank's vertices. set_share_routes says where they go (a layout's).
   virtual std::span<const ContactShare> contact_shares() = 0;
+  virtual void queue_contact_sums() = 0;
   virtual void add_contact_forces(std::span<const ContactShare> in) = 0;
   virtual void set_share_routes(const ShareRoutes& routes) = 0;
   // Halo exchange of x and v by index lists, packed where the data lives (on the GPU for

@@ -213,7 +213,10 @@ class QdemBackend final : public Backend {
         });
   }
   std::span<const ContactShare> contact_shares() override {
-    return contact_ ? contact_->shares(f_.view()) : std::span<const ContactShare>{};
+    return contact_ ? contact_->shares() : std::span<const ContactShare>{};
+  }
+  void queue_contact_sums() override {
+    if (contact_) contact_->queue_sums(f_.view());
   }
   void add_contact_forces(std::span<const ContactShare> in) override {
     if (contact_) contact_->add_forces(f_.view(), in);

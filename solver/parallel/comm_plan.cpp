@@ -97,7 +97,8 @@ CommEngine::~CommEngine() {
   int finalized = 0;
   MPI_Finalized(&finalized);
   if (!finalized && comm_ != MPI_COMM_NULL) {
-    if (in_flight_) MPI_Waitall(static_cast<int>(reqs_.size()), reqs_.data(), MPI_STATUSES_IGNORE);
+    if (in_flight_ || exchanging_)
+      MPI_Waitall(static_cast<int>(reqs_.size()), reqs_.data(), MPI_STATUSES_IGNORE);
     if (device_) unmap_peers();  // no neighbour maps this rank's buffers when they are freed
     MPI_Comm_free(&comm_);
   }
@@ -435,10 +436,10 @@ void CommEngine::unpack(std::span<const CommField> dst, Dir dir, bool self) {
   seconds_.unpack += MPI_Wtime() - t1;
 }
 
-std::vector<std::byte> CommEngine::exchange(std::span<const std::byte> send,
-                                            std::span<const std::int64_t> send_off,
-                                            std::size_t stride) {
-  if (in_flight_) throw std::logic_error("comm plan: exchange() while an exchange is in flight");
+void CommEngine::exchange_begin(std::span<const std::byte> send,
+                                std::span<const std::int64_t> send_off, std::size_t stride) {
+  if (in_flight_ || exchanging_)
+    throw std::logic_error("comm plan: exchange_begin() while an exchange is in flight");
   if (static_cast<int>(send_off.size()) != size_ + 1 ||
       static_cast<std::size_t>(send_off[size_]) * stride != send.size())
     throw std::invalid_argument("comm plan: exchange() needs size() + 1 offsets over the records");
@@ -450,20 +451,26 @@ std::vector<std::byte> CommEngine::exchange(std::span<const std::byte> send,
   // One message a neighbour, of the size its sender knows; the receiver learns it by a matched
   // probe: a single round where counts, then records, took two (on a GPU rank the contact shares
   // end the step this way).
-  const std::size_t nn = nbrs_.size();
-  std::vector<MPI_Request> req;
-  req.reserve(2 * nn);
+  reqs_.clear();
   last_bytes_ = 0;
   for (const int r : nbrs_) {
     const std::int64_t n = send_off[r + 1] - send_off[r];
-    req.emplace_back();
+    reqs_.emplace_back();
     MPI_Isend(send.data() + send_off[r] * stride, as_count(n * stride), MPI_BYTE, r, kTag + 2,
-              comm_, &req.back());
+              comm_, &reqs_.back());
     last_bytes_ += n * static_cast<std::int64_t>(stride);
   }
+  xself_ = send.subspan(send_off[rank_] * stride, (send_off[rank_ + 1] - send_off[rank_]) * stride);
+  xstride_ = stride;
+  exchanging_ = true;
+}
+
+std::vector<std::byte> CommEngine::exchange_finish() {
+  if (!exchanging_) throw std::logic_error("comm plan: exchange_finish() without exchange_begin()");
+  const std::size_t nn = nbrs_.size(), stride = xstride_;
   std::vector<MPI_Message> msg(nn);
   std::vector<std::int64_t> roff(size_ + 1, 0);
-  roff[rank_ + 1] = send_off[rank_ + 1] - send_off[rank_];
+  roff[rank_ + 1] = static_cast<std::int64_t>(xself_.size() / stride);
   for (std::size_t k = 0; k < nn; ++k) {
     MPI_Status st;
     MPI_Mprobe(nbrs_[k], kTag + 2, comm_, &msg[k], &st);
@@ -479,14 +486,14 @@ std::vector<std::byte> CommEngine::exchange(std::span<const std::byte> send,
   std::vector<std::byte> out(roff[size_] * stride);
   for (std::size_t k = 0; k < nn; ++k) {
     const int r = nbrs_[k];
-    req.emplace_back();
+    reqs_.emplace_back();
     MPI_Imrecv(out.data() + roff[r] * stride, as_count((roff[r + 1] - roff[r]) * stride), MPI_BYTE,
-               &msg[k], &req.back());
+               &msg[k], &reqs_.back());
   }
-  if (roff[rank_ + 1] > roff[rank_])
-    std::memcpy(out.data() + roff[rank_] * stride, send.data() + send_off[rank_] * stride,
-                (roff[rank_ + 1] - roff[rank_]) * stride);
-  MPI_Waitall(static_cast<int>(req.size()), req.data(), MPI_STATUSES_IGNORE);
+  if (!xself_.empty()) std::memcpy(out.data() + roff[rank_] * stride, xself_.data(), xself_.size());
+  MPI_Waitall(static_cast<int>(reqs_.size()), reqs_.data(), MPI_STATUSES_IGNORE);
+  reqs_.clear();
+  exchanging_ = false;
   total_bytes_ += last_bytes_;
   return out;
 }

@@ -170,12 +170,20 @@ class CommEngine {
   // interior tets, which so run while the exchange is posted). No-op in host mode.
   void mark_packed();
 
-  // Variable-length exchange with the neighbours() (blocking; none in flight): records of
-  // `stride` bytes in `send`, grouped by destination rank by send_off (size() + 1 entries);
-  // every destination must be a neighbour or this rank. Returns the records received, by
-  // source rank, then sender order. last_bytes() becomes the bytes sent.
+  // Variable-length exchange with the neighbours() (none in flight): records of `stride` bytes
+  // in `send`, grouped by destination rank by send_off (size() + 1 entries); every destination
+  // must be a neighbour or this rank. exchange_begin posts the sends (`send` must stay valid
+  // until exchange_finish; other work goes on between, e.g. while the neighbours get there),
+  // exchange_finish returns the records received, by source rank, then sender order.
+  // last_bytes() becomes the bytes sent. exchange() is the two in one.
+  void exchange_begin(std::span<const std::byte> send, std::span<const std::int64_t> send_off,
+                      std::size_t stride);
+  std::vector<std::byte> exchange_finish();
   std::vector<std::byte> exchange(std::span<const std::byte> send,
-                                  std::span<const std::int64_t> send_off, std::size_t stride);
+                                  std::span<const std::int64_t> send_off, std::size_t stride) {
+    exchange_begin(send, send_off, stride);
+    return exchange_finish();
+  }
 
   std::int64_t n_send() const { return static_cast<std::int64_t>(send_index_.size()); }
   std::int64_t n_recv() const { return recv_off_.back(); }
@@ -235,6 +243,10 @@ class CommEngine {
   void unpack(std::span<const CommField> dst, Dir dir, bool self);
   bool in_flight_ = false;
   Dir dir_ = Dir::Forward;
+  // exchange_begin's: this rank's own records and the record size (exchanging_ until finish).
+  bool exchanging_ = false;
+  std::span<const std::byte> xself_;
+  std::size_t xstride_ = 0;
   std::int64_t last_bytes_ = 0, total_bytes_ = 0;
   Seconds seconds_;
 };

@@ -218,6 +218,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
                              false);
       local_->assemble_forces(dt_diss, alpha);
     }
+    // The shares leave before this rank's own contact sums are queued (a GPU rank's host
+    // launches them while the neighbours get to their sends), and arrive after.
     std::vector<std::byte> in;
     if (contact_) {
       std::span<const ContactShare> out;
@@ -226,9 +228,19 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
         auto s1 = tm.launch("elements.shares");
         out = local_->contact_shares();
       }
+      {
+        auto s = tm.launch("halo");
+        auto s1 = tm.launch("halo.shares");
+        send_shares(out);
+      }
+      {
+        auto s = tm.launch("elements");
+        auto s1 = tm.launch("elements.shares");
+        local_->queue_contact_sums();
+      }
       auto s = tm.launch("halo");
       auto s1 = tm.launch("halo.shares");
-      in = exchange_shares(out);
+      in = halo_->engine().exchange_finish();
     }
     {
       auto s = tm.scope("elements");
@@ -442,6 +454,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   void undo_dissipation() override { unsupported("undo_dissipation"); }
   void assemble_forces(double, double) override { unsupported("assemble_forces"); }
   std::span<const ContactShare> contact_shares() override { unsupported("contact_shares"); }
+  void queue_contact_sums() override { unsupported("queue_contact_sums"); }
   void add_contact_forces(std::span<const ContactShare>) override {
     unsupported("add_contact_forces");
   }
@@ -796,11 +809,12 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     return c;
   }
 
-  // The contact force shares of ghost vertices (this rank evaluated their records) to the
+  // The contact force shares of ghost vertices (this rank evaluated their records) sent to the
   // vertices' owners, as the contact stage wrote them (ContactShare: the owner's rank and index
-  // there, global keys); returns the records of those other ranks evaluated for owned vertices,
-  // by source rank. Over the halo plan's neighbours: a ghost's owner is one.
-  std::vector<std::byte> exchange_shares(std::span<const ContactShare> out) {
+  // there, global keys); the halo engine's exchange_finish returns the records of those other
+  // ranks evaluated for owned vertices, by source rank. Over the halo plan's neighbours: a
+  // ghost's owner is one.
+  void send_shares(std::span<const ContactShare> out) {
     std::vector<std::int64_t> off(np_ + 1, 0);
     for (const ContactShare& s : out) {
       if (s.rank < 0 || s.rank >= np_ || s.rank == me_)
@@ -811,13 +825,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
     for (int r = 0; r < np_; ++r) off[r + 1] += off[r];
     std::vector<std::int64_t> fill(off.begin(), off.end() - 1);
-    std::vector<ContactShare> send(out.size());
-    for (const ContactShare& s : out) send[fill[s.rank]++] = s;
+    shares_out_.resize(out.size());
+    for (const ContactShare& s : out) shares_out_[fill[s.rank]++] = s;
     CommEngine& e = halo_->engine();
-    std::vector<std::byte> in =
-        e.exchange(std::as_bytes(std::span(send)), off, sizeof(ContactShare));
+    e.exchange_begin(std::as_bytes(std::span(shares_out_)), off, sizeof(ContactShare));
     halo_bytes_ += e.last_bytes();
-    return in;
   }
 
   // Where this rank's contact shares go (ShareRoutes), for the layout L just installed (its halo
@@ -1578,6 +1590,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   bool pending_after_ = false;
   std::vector<RebalanceEntry> log_;
   std::int64_t migrated_bytes_ = 0, halo_bytes_ = 0, exchanges_ = 0;
+  std::vector<ContactShare> shares_out_;  // send_shares' records, by destination, in flight
   // Fluid coupling: whole-model arrays by global vertex id (solid_views()), in the local
   // backend's space, and what moves values between them and the local arrays.
   bool coupled_ = false;
