@@ -51,8 +51,8 @@ void cuda_copy_fence();
 void cuda_copy_queued(void* dst, const void* src, std::size_t bytes);
 // A point in this process's default-stream work (a CUDA event; the side stream's in a
 // SideQueue): record() after the work queued so far, wait() returns once that work is done
-// while work queued later runs on. wait() before
-// any record() returns at once. Only for device work: record() makes the process's GPU context.
+// while work queued later runs on. wait() before any record() returns at once. Only for device
+// work: record() makes the process's GPU context.
 class DeviceMark {
  public:
   DeviceMark() = default;

@@ -273,14 +273,16 @@ void cuda_copy(void* dst, Space ds, const void* src, Space ss, std::size_t bytes
 void cuda_sync() { QDEMSPH_CUDA_CHECK(cudaDeviceSynchronize(), "cudaDeviceSynchronize"); }
 
 namespace {
+// A stream that does not wait for the default stream's work (the copy stream, the side stream).
+cudaStream_t non_blocking_stream() {
+  use_preferred_device();
+  cudaStream_t t = nullptr;
+  QDEMSPH_CUDA_CHECK(cudaStreamCreateWithFlags(&t, cudaStreamNonBlocking),
+                     "cudaStreamCreateWithFlags");
+  return t;
+}
 cudaStream_t copy_stream() {
-  static const cudaStream_t s = [] {
-    use_preferred_device();
-    cudaStream_t t = nullptr;
-    QDEMSPH_CUDA_CHECK(cudaStreamCreateWithFlags(&t, cudaStreamNonBlocking),
-                       "cudaStreamCreateWithFlags");
-    return t;
-  }();
+  static const cudaStream_t s = non_blocking_stream();
   return s;
 }
 }  // namespace
@@ -312,13 +314,7 @@ void cuda_copy_queued(void* dst, const void* src, std::size_t bytes) {
 namespace {
 thread_local cudaStream_t queue_stream = 0;
 cudaStream_t side_stream() {
-  static const cudaStream_t s = [] {
-    use_preferred_device();
-    cudaStream_t t = nullptr;
-    QDEMSPH_CUDA_CHECK(cudaStreamCreateWithFlags(&t, cudaStreamNonBlocking),
-                       "cudaStreamCreateWithFlags (side)");
-    return t;
-  }();
+  static const cudaStream_t s = non_blocking_stream();
   return s;
 }
 }  // namespace
