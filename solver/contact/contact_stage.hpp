@@ -485,8 +485,9 @@ class ContactStage {
     rebuilds_ = 0;
     steps_ = 0;
     stats_ = {};
-    max_overlap_ever_ = 0;
-    dissipated_ = 0;
+    stats_current_ = true;
+    acc_.resize(2);
+    acc_.zero();
     timers_.clear();
   }
 
@@ -634,9 +635,9 @@ class ContactStage {
     s.skin = skin_;
     s.rebuilds = rebuilds_;
     s.steps = steps_;
-    s.stats = stats_;
-    s.max_overlap_ever = max_overlap_ever_;
-    s.dissipated = dissipated_;
+    s.stats = stats();
+    s.max_overlap_ever = max_overlap_ever();
+    s.dissipated = dissipated_energy();
     return s;
   }
 
@@ -683,8 +684,8 @@ class ContactStage {
     rebuilds_ = s.rebuilds;
     steps_ = s.steps;
     stats_ = s.stats;
-    max_overlap_ever_ = s.max_overlap_ever;
-    dissipated_ = s.dissipated;
+    stats_current_ = true;
+    acc_.assign(std::vector<double>{s.dissipated, s.max_overlap_ever});
   }
 
   const std::map<std::string, double>& seconds() const { return timers_.seconds(); }
@@ -697,10 +698,28 @@ class ContactStage {
   Evaluator evaluator() const {
     return {vgid_.cview(), vertex_body_.cview(), body_lead_.cview(), nfv_, nfree_, !ghosts_};
   }
-  // Energy dissipated by the contact dashpots and Coulomb slip since the start [J].
-  double dissipated_energy() const { return dissipated_; }
-  const ContactStepStats& stats() const { return stats_; }
-  double max_overlap_ever() const { return max_overlap_ever_; }
+  // Energy dissipated by the contact dashpots and Coulomb slip since the start [J] (accumulated
+  // where the stage runs: on a GPU, read back here, not every step).
+  double dissipated_energy() const { return read_back(acc_, 0); }
+  // The last evaluation's counters. The active contacts and the largest overlap are counted here
+  // from its records, when asked (not every step: on a GPU two read-backs a step).
+  const ContactStepStats& stats() const {
+    if (!stats_current_) {
+      const auto act = pact_.cview();
+      const auto rec = rec_.cview();
+      const double d_dem = d_dem_;
+      stats_.active = static_cast<std::int64_t>(reduce_sum(
+          Exec{}, n_prev_, QDEMSPH_LAMBDA(std::int64_t c) { return static_cast<double>(act[c]); }));
+      stats_.max_overlap = reduce_max(
+          Exec{}, n_prev_,
+          QDEMSPH_LAMBDA(std::int64_t c) { return act[c] ? d_dem - rec[c].d : 0.0; }, 0.0);
+      stats_current_ = true;
+    }
+    return stats_;
+  }
+  // The largest overlap of any evaluation since the start (the penetration guard's kernel keeps
+  // it where the stage runs).
+  double max_overlap_ever() const { return read_back(acc_, 1); }
   std::int64_t steps() const { return steps_; }
   std::int64_t pair_rebuilds() const { return rebuilds_; }
   std::size_t bytes() const {
@@ -1155,8 +1174,9 @@ class ContactStage {
       const auto ed = ediss_.cview();
       const auto prec = prec_.cview();
       const std::int64_t ncur = nc;
-      dissipated_ += reduce_sum(
-          Exec{}, nc > nprev ? nc : nprev, QDEMSPH_LAMBDA(std::int64_t i) {
+      reduce_sum_into(
+          Exec{}, nc > nprev ? nc : nprev,
+          QDEMSPH_LAMBDA(std::int64_t i) {
             double s = i < ncur ? ed[i] : 0.0;
             if (i < nprev && pact[i]) {
               const std::int64_t lo = lower_bound_index(ncur, [&](std::int64_t m) {
@@ -1172,7 +1192,8 @@ class ContactStage {
               }
             }
             return s;
-          });
+          },
+          acc_.view().p);
     }
     // The keys and springs become the next step's history (already sorted).
     std::swap(pk1_, nk1_);
@@ -1186,24 +1207,22 @@ class ContactStage {
 
     const auto pxc = rec_.cview();
     const auto act = pact_.cview();  // this step's, after the swap
-    stats_.active = static_cast<std::int64_t>(reduce_sum(
-        Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) { return static_cast<double>(act[c]); }));
-    stats_.max_overlap = reduce_max(
-        Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) { return act[c] ? d_dem - pxc[c].d : 0.0; },
-        0.0);
-    if (stats_.max_overlap > max_overlap_ever_) max_overlap_ever_ = stats_.max_overlap;
+    stats_current_ = false;          // stats() counts the active contacts when asked
     // Penetration guard: surfaces crossed deeper than the bound (contact.max_penetration, or
-    // half the pair's smaller mean surface edge) flag the first such contact found.
+    // half the pair's smaller mean surface edge) flag the first such contact found. The same
+    // pass keeps the largest overlap ever (max_overlap_ever).
     {
       const auto bh = body_h_.cview();
       const double mp = max_pen_;
       unsigned long long* flag = pen_flag_.view().p;
       ContactRecord* info = pen_rec_.view().p;
       double* val = pen_val_.view().p;
+      double* ever = acc_.view().p + 1;
       for_each(
           Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
             if (!act[c]) return;
             const ContactRecord& r = pxc[c];
+            atomic_max_positive(ever, d_dem - r.d);
             const double h1 = bh[r.body1];
             const double h = r.body2 >= 0 && bh[r.body2] < h1 ? bh[r.body2] : h1;
             const double bound = mp > 0 ? mp : 0.5 * h;
@@ -1495,14 +1514,15 @@ class ContactStage {
   Buffer<double> pen_{S}, nen_{S}, pet_{S}, net_{S}, ediss_{S};  // per-contact energy [J]
   Vec3Buffer ph_{S}, nh_{S};       // per-contact non-potential force h (contact_energy) [N]
   Buffer<ContactRecord> prec_{S};  // the previous step's records
-  double dissipated_ = 0;
+  // Where the stage runs: [0] the dissipated energy since the start, [1] the largest overlap.
+  Buffer<double> acc_{S};
   Vec3Buffer pc_ref_{S};
   Buffer<double> pr_ref_{S};
   bool built_ = false;
   double skin_ = 0, skin_setting_ = -1;
   std::int64_t rebuilds_ = 0;
-  ContactStepStats stats_;
-  double max_overlap_ever_ = 0;
+  mutable ContactStepStats stats_;     // active, max_overlap: counted by stats()
+  mutable bool stats_current_ = true;  // stats_ has the last evaluation's active and overlap
   double max_pen_ = 0;  // contact.max_penetration [m]; 0: half the pair's mean surface edge
   Buffer<unsigned long long> pen_flag_{S};
   Buffer<ContactRecord> pen_rec_{S};

@@ -74,10 +74,12 @@ struct MaxOp {
 };
 
 // Both levels: each block writes its partial and counts itself done; the last one folds the
-// partials (a launch fewer than a second kernel) and resets the count (atomicInc wraps to 0).
+// partials (a launch fewer than a second kernel), writes the result to *out (adds it when
+// `add`) and resets the count (atomicInc wraps to 0).
 template <class F, class Op>
 __global__ void __launch_bounds__(kBlock)
-    reduce_kernel(std::int64_t n, F f, Op op, double init, double* partial, unsigned* done) {
+    reduce_kernel(std::int64_t n, F f, Op op, double init, double* partial, unsigned* done,
+                  double* out, bool add) {
   double acc = init;
   const std::int64_t stride = static_cast<std::int64_t>(kBlock) * gridDim.x;
   for (std::int64_t i = static_cast<std::int64_t>(blockIdx.x) * kBlock + threadIdx.x; i < n;
@@ -98,19 +100,22 @@ __global__ void __launch_bounds__(kBlock)
   for (unsigned i = threadIdx.x; i < gridDim.x; i += kBlock) acc = op(acc, __ldcg(partial + i));
   __syncthreads();  // tmp is used again
   const double s = BlockReduce(tmp).Reduce(acc, op);
-  if (threadIdx.x == 0) partial[kMaxPartials] = s;
+  if (threadIdx.x == 0) *out = add ? *out + s : s;
 }
 
-// Queues the reduction; the result lands in the device slot returned (n > 0).
+// Queues the reduction (n > 0); the result lands in the device slot returned: `out`, or the
+// scratch's (added to *out when `add`).
 template <class F, class Op>
-const double* reduce_queue(std::int64_t n, F f, Op op, double init) {
+const double* reduce_queue(std::int64_t n, F f, Op op, double init, double* out = nullptr,
+                           bool add = false) {
   const std::int64_t want = (n + kBlock - 1) / kBlock;
   const int blocks = static_cast<int>(want < kMaxPartials ? want : kMaxPartials);
   double* scratch = cuda_reduce_scratch();
+  if (!out) out = scratch + kMaxPartials;
   reduce_kernel<<<blocks, kBlock, 0, cuda_stream()>>>(
-      n, f, op, init, scratch, reinterpret_cast<unsigned*>(scratch + kMaxPartials + 1));
+      n, f, op, init, scratch, reinterpret_cast<unsigned*>(scratch + kMaxPartials + 1), out, add);
   QDEMSPH_CUDA_CHECK(cudaGetLastError(), "reduce_kernel launch");
-  return scratch + kMaxPartials;
+  return out;
 }
 
 template <class F, class Op>
@@ -145,6 +150,13 @@ double reduce_sum(CudaExec, std::int64_t n, F f) {
 template <class F>
 double reduce_max(CudaExec, std::int64_t n, F f, double init) {
   return cuda_detail::reduce(n, f, cuda_detail::MaxOp{}, init);
+}
+
+// *acc += the sum of f(i) over [0, n), queued (acc: device memory): an accumulator the host
+// reads when it needs it, not every step.
+template <class F>
+void reduce_sum_into(CudaExec, std::int64_t n, F f, double* acc) {
+  if (n > 0) cuda_detail::reduce_queue(n, f, cuda_detail::SumOp{}, 0.0, acc, true);
 }
 
 // reduce_max queued: the result is copied to *out (host memory; page-locked for the copy to

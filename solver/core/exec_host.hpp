@@ -35,6 +35,12 @@ double reduce_sum(HostExec, std::int64_t n, F f) {
   return s;
 }
 
+// *acc += reduce_sum (the CUDA twin queues it into a device accumulator).
+template <class F>
+void reduce_sum_into(HostExec, std::int64_t n, F f, double* acc) {
+  *acc += reduce_sum(HostExec{}, n, f);
+}
+
 template <class F>
 double reduce_max(HostExec, std::int64_t n, F f, double init) {
   double m = init;

@@ -6,6 +6,7 @@
 #include <omp.h>
 
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "core/exec_host.hpp"
@@ -19,6 +20,24 @@ QDEMSPH_HD int atomic_inc(int* p) {
   return atomicAdd(p, 1);
 #else
   return __atomic_fetch_add(p, 1, __ATOMIC_RELAXED);
+#endif
+}
+
+// *p = max(*p, v) for v > 0 and *p >= 0 (a NaN or a v <= 0 changes nothing): non-negative
+// doubles order as their bit patterns do.
+QDEMSPH_HD void atomic_max_positive(double* p, double v) {
+  if (!(v > 0)) return;
+#if defined(__CUDA_ARCH__)
+  atomicMax(reinterpret_cast<unsigned long long*>(p),
+            static_cast<unsigned long long>(__double_as_longlong(v)));
+#else
+  std::uint64_t bits = 0;
+  std::memcpy(&bits, &v, sizeof bits);
+  auto* q = reinterpret_cast<std::uint64_t*>(p);
+  std::uint64_t old = __atomic_load_n(q, __ATOMIC_RELAXED);
+  while (old < bits &&
+         !__atomic_compare_exchange_n(q, &old, bits, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+  }
 #endif
 }
 

@@ -495,6 +495,11 @@ ContactRun compare_contact(const std::string& name, const std::string& yaml, int
     r.max_active = std::max<std::int64_t>(r.max_active, static_cast<std::int64_t>(c.at("active")));
   }
   r.steps = steps;
+  // The largest overlap of the run, kept on the device by the penetration guard's kernel.
+  const double oc = p.cpu->contact_stats().at("max_overlap_ever"),
+               og = p.gpu->contact_stats().at("max_overlap_ever");
+  EXPECT_GT(oc, 0.0) << name;
+  EXPECT_NEAR(og, oc, 1e-6 * oc) << name << ": largest overlap";
   const HostFields c = p.cpu->download(false), g = p.gpu->download(false);
   r.dx = rel_diff(displacement(g.x, m), displacement(c.x, m));
   r.dv = rel_diff(g.v, c.v);

@@ -1,7 +1,7 @@
 // Host orchestration primitives of a distributed rank's layout rebuild: stream compaction and
 // bucketing by key (core/select_host.hpp), the sorting permutation (core/radix_sort.hpp), the
-// prefix sum of counts (neighbor/scan.hpp) and the several maxima of one pass
-// (core/exec_host.hpp) give the serial answers, the same for any number of threads.
+// prefix sum of counts and the atomic maximum (neighbor/scan.hpp) and the several maxima of one
+// pass (core/exec_host.hpp) give the serial answers, the same for any number of threads.
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -110,6 +110,32 @@ TEST(HostSelect, ReduceMaxEachForAnyThreadCount) {
   }
   const auto none = [](std::int64_t) { return std::array<double, 2>{1.0, 2.0}; };
   EXPECT_EQ((reduce_max_each<2>(HostExec{}, 0, none, 3.0)), (std::array<double, 2>{3.0, 3.0}));
+}
+
+// atomic_max_positive from many threads keeps the largest positive value; NaN, zero and
+// negative values change nothing.
+TEST(HostSelect, AtomicMaxPositiveForAnyThreadCount) {
+  const std::int64_t n = 3 * kMinParallel + 5;
+  auto f = [](std::int64_t i) {
+    if (i == 17) return std::nan("");
+    return static_cast<double>((i * 2654435761u) % 100003) - 50000.0;
+  };
+  double want = 0;
+  for (std::int64_t i = 0; i < n; ++i)
+    if (f(i) > want) want = f(i);
+  for (int t : {1, 2, 3, 8}) {
+    const double m = with_threads(t, [&] {
+      double acc = 0;
+      for_each(HostExec{}, n, [&](std::int64_t i) { atomic_max_positive(&acc, f(i)); });
+      return acc;
+    });
+    EXPECT_EQ(m, want) << t << " threads";
+  }
+  double acc = 2.5;
+  atomic_max_positive(&acc, -7.0);
+  atomic_max_positive(&acc, std::nan(""));
+  atomic_max_positive(&acc, 1.0);
+  EXPECT_EQ(acc, 2.5);
 }
 
 }  // namespace
