@@ -273,12 +273,18 @@ void cuda_copy(void* dst, Space ds, const void* src, Space ss, std::size_t bytes
 void cuda_sync() { QDEMSPH_CUDA_CHECK(cudaDeviceSynchronize(), "cudaDeviceSynchronize"); }
 
 namespace {
-// A stream that does not wait for the default stream's work (the copy stream, the side stream).
-cudaStream_t non_blocking_stream() {
+// A stream that does not wait for the default stream's work (the copy stream, the side stream);
+// `urgent`: at the device's greatest priority, whose kernels' blocks the GPU starts before the
+// default stream's waiting ones.
+cudaStream_t non_blocking_stream(bool urgent = false) {
   use_preferred_device();
+  int least = 0, greatest = 0;
+  if (urgent)
+    QDEMSPH_CUDA_CHECK(cudaDeviceGetStreamPriorityRange(&least, &greatest),
+                       "cudaDeviceGetStreamPriorityRange");
   cudaStream_t t = nullptr;
-  QDEMSPH_CUDA_CHECK(cudaStreamCreateWithFlags(&t, cudaStreamNonBlocking),
-                     "cudaStreamCreateWithFlags");
+  QDEMSPH_CUDA_CHECK(cudaStreamCreateWithPriority(&t, cudaStreamNonBlocking, greatest),
+                     "cudaStreamCreateWithPriority");
   return t;
 }
 cudaStream_t copy_stream() {
@@ -314,7 +320,7 @@ void cuda_copy_queued(void* dst, const void* src, std::size_t bytes) {
 namespace {
 thread_local cudaStream_t queue_stream = 0;
 cudaStream_t side_stream() {
-  static const cudaStream_t s = non_blocking_stream();
+  static const cudaStream_t s = non_blocking_stream(true);
   return s;
 }
 }  // namespace
