@@ -523,30 +523,25 @@ class ContactStage {
   // The last evaluation's force shares of free vertices held but not owned (an MPI rank's
   // ghosts; none on one process), as they travel (ContactShare: the owner's rank and index,
   // global keys), in no fixed order; valid until the next call. The force law compacted them
-  // and queued their count's copy (queue_shares); the host reads them into page-locked memory
-  // while the device runs the element gather queued before.
+  // and queued their copy to page-locked memory (queue_shares); the host waits for it while the
+  // device runs the element gather queued before.
   std::span<const ContactShare> shares() {
     if (!ghosts_) return {};
     int count = 0;
     if constexpr (S == Space::Cuda) {
       shares_mark_.wait();
-      std::memcpy(&count, share_count_.data(), sizeof(int));
+      std::memcpy(&count, share_read_.data(), sizeof(int));
     } else {
       count = count_.cview()[0];
     }
     const std::int64_t n = count;
     if (n > out_.size()) {  // as narrow_phase: again with room for all (the count is exact)
       out_.resize(count_room(n));
-      compact_shares(4 * n_prev_, pk1_.cview(), pk2_.cview());
-      if constexpr (S == Space::Cuda) shares_mark_.record();
-    }
-    if constexpr (S == Space::Cuda) {
-      const std::size_t bytes = sizeof(ContactShare) * n;
-      fit_count(share_read_, static_cast<std::int64_t>(bytes));
-      read_marked(share_read_.data(), out_.cview().p, bytes);
+      queue_shares(4 * n_prev_, pk1_.cview(), pk2_.cview());
+      if constexpr (S == Space::Cuda) shares_mark_.wait();
     }
     if constexpr (S == Space::Cuda)
-      return {reinterpret_cast<const ContactShare*>(share_read_.data()),
+      return {reinterpret_cast<const ContactShare*>(share_read_.data() + kShareHead),
               static_cast<std::size_t>(n)};
     else
       return {out_.cview().p, static_cast<std::size_t>(n)};
@@ -1164,7 +1159,7 @@ class ContactStage {
             ef.set(4 * c + k, (k < r.n1 ? r.w[k] : -r.w[k]) * cf.f);
           }
         });
-    if (ghosts_) queue_shares(nc);
+    if (ghosts_) queue_shares(4 * nc, nk1_.cview(), nk2_.cview());
     // Dissipation of this step: per contact, plus for each of the previous step's touches with
     // no active successor (binary search in this step's sorted keys) its spring energy and the
     // second half of its last h's work, -h/2 . v_rel dt at this step's velocities.
@@ -1330,15 +1325,18 @@ class ContactStage {
         });
   }
 
-  // The force law's shares (nc records, keys nk1_, nk2_) compacted and, on a GPU, their count
-  // copied to page-locked memory, on the side stream: the default stream's dissipation, sums
-  // and gathers go on meanwhile (none reads the shares), and shares() waits for shares_mark_.
-  void queue_shares(std::int64_t nc) {
+  // compact_shares and, on a GPU, the shares copied to page-locked memory (share_read_: their
+  // count, then as many as out_ holds, the count known only after), on the side stream: the
+  // default stream's dissipation, sums and gathers go on meanwhile (none reads the shares), and
+  // shares() waits for shares_mark_.
+  void queue_shares(std::int64_t ne, View<const std::uint64_t> k1, View<const std::uint64_t> k2) {
     SideQueue side(S == Space::Cuda);
-    compact_shares(4 * nc, nk1_.cview(), nk2_.cview());
+    compact_shares(ne, k1, k2);
     if constexpr (S == Space::Cuda) {
-      share_count_.resize(sizeof(int));
-      cuda_copy_queued(share_count_.data(), count_.cview().p, sizeof(int));
+      const std::size_t bytes = sizeof(ContactShare) * out_.size();
+      share_read_.resize(kShareHead + bytes);
+      cuda_copy_queued(share_read_.data(), count_.cview().p, sizeof(int));
+      if (bytes > 0) cuda_copy_queued(share_read_.data() + kShareHead, out_.cview().p, bytes);
       shares_mark_.record();
     }
   }
@@ -1425,19 +1423,6 @@ class ContactStage {
         });
   }
 
-  // n bytes of device memory written before the last shares_mark_, read without waiting for the
-  // kernels queued since (gather_local): on this process's copy stream.
-  void read_marked(void* dst, const void* src, std::size_t bytes) {
-    if (bytes == 0) return;
-    if constexpr (S == Space::Cuda) {
-      shares_mark_.wait();
-      cuda_copy_async(dst, src, bytes);
-      cuda_copy_wait();
-    } else {
-      std::memcpy(dst, src, bytes);
-    }
-  }
-
   // Drops the records another rank evaluates (a fixed vertex's point-face hits: tested wherever
   // both sides are held, so that the duplicate filter sees them all); the key order stays.
   std::int64_t keep_evaluated(std::int64_t nc) {
@@ -1492,6 +1477,7 @@ class ContactStage {
   Buffer<std::int32_t> sorder_{S};
   Buffer<ContactShare> in_{S}, out_{S};    // shares received and to send (add_forces, shares)
   StagingBytes share_read_, share_write_;  // a GPU's shares on the host: out_'s, in_'s
+  static constexpr std::size_t kShareHead = 64;  // share_read_: the count, then the shares
   Buffer<std::int32_t> route_rank_{S}, route_index_{S};  // ShareRoutes (set_share_routes)
   Buffer<std::int64_t> tri_gid_{S}, edge_gid_{S};
   Vec3Buffer base_{S};  // an MPI rank's share targets' force before contact (gather_local)
@@ -1502,8 +1488,7 @@ class ContactStage {
   std::vector<std::int32_t> share_head_, share_next_, share_first_;
   std::vector<std::uint8_t> share_host_;  // share_flag_ on the host (merge_shares checks)
   bool local_sorted_ = false;             // gather_local ran for the last evaluation
-  DeviceMark shares_mark_;                // after the shares' compaction (shares, read_marked)
-  StagingBytes share_count_;              // their count, copied with them (queue_shares)
+  DeviceMark shares_mark_;                // after the shares' compaction and copy (queue_shares)
   Buffer<int> keep_{S};                 // flags and their scan (keep_evaluated, order_border_last)
   Buffer<int> tfirst_{S}, tsecond_{S};  // the narrow phase's pair order on a rank with ghosts
   bool timed_ = false;                  // the last evaluation was a dynamic step
