@@ -37,10 +37,13 @@ QDEMSPH_HD std::uint64_t contact_key1(int type, std::uint64_t id1) {
 // The id1 bits of k1.
 inline constexpr std::uint64_t kIdMask = (std::uint64_t{1} << 60) - 1;
 
-// The key order (k1, then k2) in one 64-bit key, for sorting: the type, then id1 in its b1 bits,
-// then k2 in its b2 bits, where id1 < 2^b1, k2 < 2^b2 and b1 + b2 <= 62 (b12 = b1 + b2).
-QDEMSPH_HD std::uint64_t sort_key(const ContactRecord& r, int b2, int b12) {
-  return (r.k1 >> 60) << b12 | (r.k1 & kIdMask) << b2 | r.k2;
+// The key order (k1, then k2) in one 64-bit key, for sorting: the type, then id1's rank in its
+// b1 bits, then k2 in its b2 bits. rank1: a number ordered as id1 among the records sorted
+// together (id1 itself, or a vertex's place among its model's vertices by global id: fewer bits
+// than a global id, as many at any rank count), rank1 < 2^b1, k2 < 2^b2, b1 + b2 <= 62
+// (b12 = b1 + b2).
+QDEMSPH_HD std::uint64_t sort_key(const ContactRecord& r, std::uint64_t rank1, int b2, int b12) {
+  return (r.k1 >> 60) << b12 | rank1 << b2 | r.k2;
 }
 
 // A key of a rank's model in global feature ids: vertices are keyed by global id already

@@ -58,6 +58,7 @@
 #include "core/error_flag.hpp"
 #include "core/exec_host.hpp"
 #include "core/memory.hpp"
+#include "core/radix_sort.hpp"
 #include "core/timers.hpp"
 #include "model/model.hpp"
 #include "neighbor/cell_grid.hpp"
@@ -434,12 +435,22 @@ class ContactStage {
     write_on_host(vgid_, nv, stage_, [&](std::uint64_t* g) {
       for_each(HostExec{}, nv, [&](std::int64_t i) { g[i] = ids ? m.gid[i] : i; });
     });
-    // The sort key's fields (sort_key): id1 a vertex gid or an edge, k2 a triangle, an edge or a
-    // wall.
-    const std::uint64_t gid_end =
-        ids && nv > 0 ? *std::max_element(m.gid.begin(), m.gid.end()) + 1 : nv;
+    // The sort key's fields (sort_key): id1 a vertex's place by global id (vrank_) or an edge
+    // (numbered in global order), k2 a triangle, an edge or a wall. A distributed run's global
+    // ids need more bits as the ranks grow (one radix pass more from 1 to 4 GPUs of the cube
+    // block); these do not.
+    write_on_host(vrank_, nv, stage_, [&](std::int32_t* rank) {
+      std::vector<std::pair<std::uint64_t, std::int32_t>> by_gid(nv), tmp;
+      for_each(HostExec{}, nv, [&](std::int64_t i) {
+        by_gid[i] = {ids ? m.gid[i] : static_cast<std::uint64_t>(i), static_cast<std::int32_t>(i)};
+      });
+      if (ids && nv > 0)
+        radix_sort(by_gid, tmp, std::bit_width(*std::max_element(m.gid.begin(), m.gid.end())));
+      for_each(HostExec{}, nv,
+               [&](std::int64_t k) { rank[by_gid[k].second] = static_cast<std::int32_t>(k); });
+    });
     key_b2_ = std::bit_width(static_cast<std::uint64_t>(std::max({ntri_, ne_, nw_})));
-    key_b12_ = key_b2_ + std::bit_width(std::max(gid_end, static_cast<std::uint64_t>(ne_)));
+    key_b12_ = key_b2_ + std::bit_width(static_cast<std::uint64_t>(std::max(nv, ne_)));
     if (key_b12_ > 62)
       throw std::logic_error("contact stage: feature ids of " + std::to_string(key_b12_) +
                              " bits do not fit a 64-bit sort key");
@@ -728,7 +739,7 @@ class ContactStage {
            pen_.bytes() + pet_.bytes() + nen_.bytes() + net_.bytes() + ediss_.bytes() +
            ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() + pr_ref_.bytes() +
            cells_.bytes() + pairs_.bytes() + vgid_.bytes() + edge_anchor_.bytes() +
-           rec_tmp_.bytes() + skey_.bytes() + sorder_.bytes() + in_.bytes() + base_.bytes() +
+           rec_tmp_.bytes() + skey_.bytes() + vrank_.bytes() + sorder_.bytes() + in_.bytes() + base_.bytes() +
            ekey_.bytes() + share_flag_.bytes() + out_.bytes() + keep_.bytes() + tfirst_.bytes() +
            tsecond_.bytes() + route_rank_.bytes() + route_index_.bytes() + tri_gid_.bytes() +
            edge_gid_.bytes();
@@ -1036,10 +1047,13 @@ class ContactStage {
     const auto rec = rec_.cview();
     const auto key = skey_.view();
     const auto order = sorder_.view();
+    const auto vrank = vrank_.cview();
     const int b2 = key_b2_, b12 = key_b12_;
     for_each(
         Exec{}, nc, QDEMSPH_LAMBDA(std::int64_t c) {
-          key[c] = sort_key(rec[c], b2, b12);
+          const ContactRecord& r = rec[c];  // point-face and wall: id1 is v[0]'s global id
+          const std::uint64_t rank1 = r.type == kEdgeEdge ? r.k1 & kIdMask : vrank[r.v[0]];
+          key[c] = sort_key(r, rank1, b2, b12);
           order[c] = static_cast<std::int32_t>(c);
         });
     const std::int32_t* sorted = sorted_order(Exec{}, key, order, nc, b12 + 2);
@@ -1474,6 +1488,7 @@ class ContactStage {
   CandidatePairs<Exec> pairs_;
   Buffer<ContactRecord> rec_{S}, rec_tmp_{S};
   Buffer<std::uint64_t> skey_{S};  // sort_records: keys and the order, twice n (scratch)
+  Buffer<std::int32_t> vrank_{S};  // per vertex its place by global id (sort_key's id1)
   Buffer<std::int32_t> sorder_{S};
   Buffer<ContactShare> in_{S}, out_{S};    // shares received and to send (add_forces, shares)
   StagingBytes share_read_, share_write_;  // a GPU's shares on the host: out_'s, in_'s

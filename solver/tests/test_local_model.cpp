@@ -181,6 +181,11 @@ void two_parts_give_the_whole_models_forces(const std::string& backend, const ch
     }
     records += static_cast<std::int64_t>(be->contact_stats().at("contacts"));
     const BackendState st = be->save_state();
+    // In key order (global ids), which a part's vertex indices are not.
+    for (std::size_t e = 1; e < st.contact->size(); ++e)
+      EXPECT_LT(std::pair(st.contact->k1[e - 1], st.contact->k2[e - 1]),
+                std::pair(st.contact->k1[e], st.contact->k2[e]))
+          << "record " << e;
     for (std::size_t e = 0; e < st.contact->size(); ++e)
       led += (st.contact->k1[e] >> 60) == kPointFace && st.contact->v[e][0] >= L.n_owned &&
              st.contact->v[e][0] < L.n_free;
