@@ -29,7 +29,7 @@ void cuda_copy_async(void*, const void*, std::size_t) { no_cuda(); }
 void cuda_copy_wait() {}
 void cuda_copy_fence() { no_cuda(); }
 void cuda_copy_queued(void*, const void*, std::size_t) { no_cuda(); }
-SideQueue::SideQueue(bool on) : on_(on) {
+SideQueue::SideQueue(bool on, const DeviceMark*) : on_(on) {
   if (on_) no_cuda();
 }
 SideQueue::~SideQueue() = default;

@@ -63,13 +63,15 @@ class DeviceMark {
   void wait();
 
  private:
+  friend class SideQueue;
   void* event_ = nullptr;
   bool pending_ = false;
 };
 // Device work beside the default stream's: while a SideQueue lives, this thread's for_each
 // kernels, reductions, cuda_copy_queued, cuda_zero (Buffer::zero) and DeviceMark::record go to
 // this process's side stream (CUDA sorts and scans do not: they share one scratch), which
-// starts after the default stream's work queued before the scope. The default stream does not
+// starts after the default stream's work queued before the scope, or, given `from`, the work
+// queued before that mark was recorded (kernels queued since run beside). The default stream does not
 // wait for the side's work: a DeviceMark recorded inside says when it is done. The side stream
 // has the GPU's greatest priority: its blocks start before the default stream's waiting ones.
 // For short work that the step's next kernels do not read and other ranks wait for (a halo's
@@ -77,7 +79,7 @@ class DeviceMark {
 // CUDA: nothing changes. Not nested.
 class SideQueue {
  public:
-  explicit SideQueue(bool on);
+  explicit SideQueue(bool on, const DeviceMark* from = nullptr);
   ~SideQueue();
   SideQueue(const SideQueue&) = delete;
   SideQueue& operator=(const SideQueue&) = delete;

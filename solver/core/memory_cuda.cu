@@ -327,16 +327,20 @@ cudaStream_t side_stream() {
 
 cudaStream_t cuda_stream() { return queue_stream; }
 
-SideQueue::SideQueue(bool on) : on_(on) {
+SideQueue::SideQueue(bool on, const DeviceMark* from) : on_(on) {
   if (!on_) return;
   if (queue_stream != 0) throw std::logic_error("SideQueue inside a SideQueue");
-  static const cudaEvent_t fork = [] {
+  static const cudaEvent_t now = [] {
     use_preferred_device();
     cudaEvent_t t = nullptr;
     QDEMSPH_CUDA_CHECK(cudaEventCreateWithFlags(&t, cudaEventDisableTiming), "cudaEventCreate");
     return t;
   }();
-  QDEMSPH_CUDA_CHECK(cudaEventRecord(fork, 0), "cudaEventRecord (side queue)");
+  cudaEvent_t fork = from ? static_cast<cudaEvent_t>(from->event_) : nullptr;
+  if (!fork) {
+    fork = now;
+    QDEMSPH_CUDA_CHECK(cudaEventRecord(fork, 0), "cudaEventRecord (side queue)");
+  }
   QDEMSPH_CUDA_CHECK(cudaStreamWaitEvent(side_stream(), fork, 0), "cudaStreamWaitEvent (side)");
   queue_stream = side_stream();
 }

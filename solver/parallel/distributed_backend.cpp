@@ -188,15 +188,17 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     PhaseTimers untimed;
     PhaseTimers& tm = dynamic ? timers_ : untimed;
     // The skin test's reduction, the halo's packing and the interior tets are queued before the
-    // ranks agree on the test: on a GPU they run meanwhile (the reduction and the packing
-    // usually queued by drift already). A rebuild finishes the exchange and starts again on the
-    // new layout (the interior tets queued so far are computed again).
-    if (!queued_) {
+    // ranks agree on the test: on a GPU they run meanwhile (the reduction usually queued by
+    // drift already, and then the packing after the interior tets, from the drift's mark). A
+    // rebuild finishes the exchange and starts again on the new layout (the interior tets
+    // queued so far are computed again).
+    const bool drifted = queued_;
+    queued_ = false;
+    if (!drifted) {
       queue_skin(tm);
       queue_pack(tm);
     }
-    queued_ = false;
-    start_halo(tm, dt_diss);
+    start_halo(tm, dt_diss, drifted ? &drifted_ : nullptr);
     if (maybe_rebuild(dynamic)) {
       queue_pack(tm);
       start_halo(tm, dt_diss);
@@ -257,12 +259,13 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     auto s = timers_.launch("integration");
     local_->kick(h);
   }
-  // On a GPU the next force evaluation's skin-test reduction and halo packing are queued with
-  // the drift, which makes x final (cube block, 2 GPUs: the device had waited 15-25 us a step
-  // more than on one GPU for those launches); the reduction is the drift's own kernel
-  // (drift_and_queue_max_moved). The scope does not synchronise: the interior tets, which
-  // compute_forces queues next, follow on the device without a gap (the skin test and the
-  // exchange wait for their own marks); the drift's device time counts in the halo's scopes.
+  // On a GPU the next force evaluation's skin-test reduction is the drift's own kernel
+  // (drift_and_queue_max_moved), and the halo's packing starts from its mark (drifted_): the
+  // interior tets, which compute_forces queues first, follow the drift on the device without
+  // waiting for the packing's launches (cube block, 4 GPUs: the host launched the interior tets
+  // ~35 us after a step's start, against ~15 us on one GPU). The scope does not synchronise (the
+  // skin test and the exchange wait for their own marks); the drift's device time counts in the
+  // halo's scopes.
   void drift(double h) override {
     if (!device_halo()) {
       auto s = timers_.scope("integration");
@@ -274,7 +277,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       local_->drift_and_queue_max_moved(h);
     else
       local_->drift(h);
-    queue_pack(timers_);
+    drifted_.record();
     queued_ = true;
   }
   void damped_step(double dt, double c) override {
@@ -920,25 +923,27 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   }
 
   // x, v of the owned vertices other ranks need, packed (on a GPU, queued on the side stream,
-  // beside the interior tets, which no longer wait for it): what start_halo sends.
-  void queue_pack(PhaseTimers& tm) {
+  // beside the interior tets, which do not wait for it; from `after`, else from the work queued
+  // so far): what start_halo sends.
+  void queue_pack(PhaseTimers& tm, const DeviceMark* after = nullptr) {
     CommEngine& e = halo_->engine();
     auto s = tm.launch("halo");
     auto s1 = tm.launch("halo.xv");
     auto buf = e.packed_send_buffer(6 * sizeof(double));
-    SideQueue side(device_halo());
+    SideQueue side(device_halo(), after);
     local_->pack_halo(reinterpret_cast<double*>(buf.data()), e.packed_space());
     e.mark_packed();
   }
 
-  // Starts the exchange of what queue_pack packed, and queues the interior tets (their
-  // vertices are all owned): on a GPU they run while the records are copied (on the copy
-  // stream) and unpacked; with the boundary tets queued after the halo, their device time
-  // counts in the contact stage's first synchronised phase (contact.broad), as on one process.
-  // Records staged through the host are posted before the interior tets, so that the messages
-  // travel meanwhile; device-resident ones after, begin_packed waiting for the pack only
-  // (mark_packed), so that the wait does not hold the tets back.
-  void start_halo(PhaseTimers& tm, double dt_diss) {
+  // Starts the exchange of what queue_pack packed (`drift`: packs it first, from the drift's
+  // mark, on a GPU), and queues the interior tets (their vertices are all owned): on a GPU they
+  // run while the records are copied (on the copy stream) and unpacked; with the boundary tets
+  // queued after the halo, their device time counts in the contact stage's first synchronised
+  // phase (contact.broad), as on one process. Records staged through the host are posted
+  // before the interior tets, so that the messages travel meanwhile; device-resident ones
+  // after, begin_packed waiting for the pack only (mark_packed), so that the wait does not
+  // hold the tets back.
+  void start_halo(PhaseTimers& tm, double dt_diss, const DeviceMark* drift = nullptr) {
     CommEngine& e = halo_->engine();
     const bool device = device_halo();
     if (!device) {
@@ -951,6 +956,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       local_->element_forces(0, L_.n_interior, dt_diss, true);
     }
     if (device) {
+      if (drift) queue_pack(tm, drift);
       auto s = tm.launch("halo");
       auto s1 = tm.launch("halo.xv");
       e.begin_packed();
@@ -1566,9 +1572,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   std::unique_ptr<MigratePlan> vertex_plan_, history_plan_;
   std::unique_ptr<CommEngine> tet_plan_;
   bool contact_ = false, preload_ = false, relaxing_ = false;
-  // The skin test and the halo's packing for the next force evaluation are queued (drift on a
-  // GPU); a new layout (install) drops them.
+  // The skin test for the next force evaluation is queued and the drift's end marked (drift on
+  // a GPU: the halo's packing starts there); a new layout (install) drops them.
   bool queued_ = false;
+  DeviceMark drifted_;
   double band_ = 1, slack_ = 0;
   double reach_ = 0, slack0_ = 0;          // diam + D_DEM; the first slack (set_slack)
   double rebuild_s_ = 0, rebuilt_at_ = 0;  // the last rebuild's seconds, its end (MPI_Wtime)
