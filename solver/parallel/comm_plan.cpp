@@ -55,6 +55,7 @@ CommEngine::CommEngine(MPI_Comm comm, std::span<const std::int64_t> dest_offsets
 void CommEngine::replan(std::span<const std::int64_t> dest_offsets, std::span<const int> dest_ranks,
                         std::int64_t recv_base) {
   if (in_flight_) throw std::logic_error("comm plan: replan() in flight");
+  settle_copied();
   recv_base_ = recv_base;
   n_items_ = static_cast<std::int64_t>(dest_offsets.size()) - 1;
   const std::int64_t n_items = n_items_;
@@ -99,6 +100,7 @@ CommEngine::~CommEngine() {
   if (!finalized && comm_ != MPI_COMM_NULL) {
     if (in_flight_ || exchanging_)
       MPI_Waitall(static_cast<int>(reqs_.size()), reqs_.data(), MPI_STATUSES_IGNORE);
+    settle_copied();
     if (device_) unmap_peers();  // no neighbour maps this rank's buffers when they are freed
     MPI_Comm_free(&comm_);
   }
@@ -216,6 +218,7 @@ void CommEngine::mark_packed() {
 }
 
 void CommEngine::post_device() {
+  settle_copied();
   // The caller's records are in dsend_ before any receiver copies them.
   if (marked_)
     packed_.wait();
@@ -264,10 +267,19 @@ std::span<const std::byte> CommEngine::finish_device() {
       reqs_.emplace_back();
       MPI_Isend(nullptr, 0, MPI_BYTE, r, kTag + 5, comm_, &reqs_.back());
     }
-  MPI_Waitall(static_cast<int>(reqs_.size()), reqs_.data(), MPI_STATUSES_IGNORE);
+  copied_.insert(copied_.end(), reqs_.begin(), reqs_.end());  // settled before the next pack
+  reqs_.clear();
   in_flight_ = false;
   seconds_.wait += MPI_Wtime() - t0;
   return {recv, stride_ * static_cast<std::size_t>(n_recv())};
+}
+
+void CommEngine::settle_copied() {
+  if (copied_.empty()) return;
+  const double t0 = MPI_Wtime();
+  MPI_Waitall(static_cast<int>(copied_.size()), copied_.data(), MPI_STATUSES_IGNORE);
+  copied_.clear();
+  seconds_.wait += MPI_Wtime() - t0;
 }
 
 void CommEngine::begin(std::span<const CommField> src, Dir dir) {
@@ -363,6 +375,7 @@ void CommEngine::post(Dir dir, bool self) {
 
 std::span<std::byte> CommEngine::packed_send_buffer(std::size_t stride) {
   if (in_flight_) throw std::logic_error("comm plan: packing while an exchange is in flight");
+  settle_copied();  // no neighbour reads the buffer any more
   stride_ = stride;
   const std::size_t n = stride_ * send_off_[size_];
   if (device_) {

@@ -156,8 +156,11 @@ class CommEngine {
   // (over NVLink between the GPUs of an H100 host: 1 MB in 10 us against ~150 us through
   // host memory and MPI, scaling/probes/devicecomm.cu). Two empty messages per neighbour
   // order the copies: "packed" (begin_packed first waits for the device, or for its work up to
-  // mark_packed(), so the records are there) and "copied" (finish_packed returns once every
-  // receiver has its copy, so the buffer may be packed again). The copies run on the copy stream
+  // mark_packed(), so the records are there) and "copied" (waited for before the buffer is
+  // packed again, packed_send_buffer, or replanned: finish_packed returns once this rank has
+  // its records, and a rank that got them first goes on while its neighbours copy theirs; it
+  // had waited for every neighbour's copy, cube block at 2 GPUs: the ranks got their records
+  // together ~15-20 us after the earlier one could have). The copies run on the copy stream
   // (cuda_copy_async): kernels queued between begin_packed and finish_packed (the interior tets) go
   // on meanwhile, and the records are in finish_packed's buffer for every kernel queued after it.
   // Collective; true only when every rank asks (`want`), every neighbour is on this node and
@@ -222,6 +225,10 @@ class CommEngine {
   std::vector<std::byte*> peer_;
   std::vector<std::int64_t> peer_off_;
   std::vector<MPI_Request> ready_;  // "packed" from the senders to this rank
+  // The last device exchange's "packed" and "copied" messages still in flight (finish_device),
+  // and the wait for them (the neighbours have copied this rank's records).
+  std::vector<MPI_Request> copied_;
+  void settle_copied();
   std::vector<char> on_node_;       // per rank: on this node (use_device)
   bool all_ranks(bool mine);        // mine on every rank (collective)
   bool neighbours_on_node() const;
