@@ -21,9 +21,13 @@ inline const std::int32_t* sorted_order(CudaExec, View<std::uint64_t> keys,
   cub::DoubleBuffer<std::uint64_t> k(keys.p, keys.p + n);
   cub::DoubleBuffer<std::int32_t> v(order.p, order.p + n);
   const int end_bit = bits > 0 ? bits : 1;
-  std::size_t bytes = 0;
-  QDEMSPH_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, bytes, k, v, n, 0, end_bit),
-                     "cub::DeviceRadixSort::SortPairs (size)");
+  static CubBytes size;
+  std::size_t bytes = size(n, end_bit, [&](std::int64_t m) {
+    std::size_t b = 0;
+    QDEMSPH_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, b, k, v, m, 0, end_bit),
+                       "cub::DeviceRadixSort::SortPairs (size)");
+    return b;
+  });
   QDEMSPH_CUDA_CHECK(
       cub::DeviceRadixSort::SortPairs(cuda_temp_storage(bytes), bytes, k, v, n, 0, end_bit),
       "cub::DeviceRadixSort::SortPairs");

@@ -49,6 +49,29 @@ cudaStream_t cuda_stream();
 double* cuda_reduce_scratch();
 void* cuda_temp_storage(std::size_t bytes);
 
+// CUB's temporary storage bytes for a call over n items, from its size query query(m) (a
+// nullptr call, which repeats the call's host-side dispatch: a contact step sorts and scans
+// every step, and its host launches, not the GPU, set the pace of a slow rank). Queried for
+// half as many items again as asked, and again only for more items or another `shape` (a
+// sort's bits): the storage for more items serves fewer. One per call site.
+class CubBytes {
+ public:
+  template <class Query>
+  std::size_t operator()(std::int64_t n, int shape, Query query) {
+    if (n > n_ || shape != shape_) {
+      n_ = n + n / 2;
+      shape_ = shape;
+      bytes_ = query(n_);
+    }
+    return bytes_;
+  }
+
+ private:
+  std::int64_t n_ = -1;
+  int shape_ = 0;
+  std::size_t bytes_ = 0;
+};
+
 namespace cuda_detail {
 
 inline constexpr int kBlock = 256;

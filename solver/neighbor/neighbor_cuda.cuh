@@ -21,9 +21,13 @@ namespace qdemsph {
 
 template <class T>
 void queue_exclusive_scan(CudaExec, View<T> c, std::int64_t n) {
-  std::size_t bytes = 0;
-  QDEMSPH_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, bytes, c.p, c.p, n + 1),
-                     "cub::DeviceScan::ExclusiveSum (size)");
+  static CubBytes size;
+  std::size_t bytes = size(n + 1, 0, [&](std::int64_t m) {
+    std::size_t b = 0;
+    QDEMSPH_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, b, c.p, c.p, m),
+                       "cub::DeviceScan::ExclusiveSum (size)");
+    return b;
+  });
   QDEMSPH_CUDA_CHECK(
       cub::DeviceScan::ExclusiveSum(cuda_temp_storage(bytes), bytes, c.p, c.p, n + 1),
       "cub::DeviceScan::ExclusiveSum");
@@ -50,11 +54,15 @@ inline void sort_by_key(CudaExec, View<const std::int64_t> keys, std::int64_t nk
   // Keys are non-negative: sorting their bits as unsigned gives the same order.
   const auto* kin = reinterpret_cast<const unsigned long long*>(keys.p);
   auto* kout = reinterpret_cast<unsigned long long*>(s.p + n);
-  std::size_t bytes = 0;
   if (n > 0) {
-    QDEMSPH_CUDA_CHECK(
-        cub::DeviceRadixSort::SortPairs(nullptr, bytes, kin, kout, s.p, order.p, n, 0, end_bit),
-        "cub::DeviceRadixSort::SortPairs (size)");
+    static CubBytes size;
+    std::size_t bytes = size(n, end_bit, [&](std::int64_t m) {
+      std::size_t b = 0;
+      QDEMSPH_CUDA_CHECK(
+          cub::DeviceRadixSort::SortPairs(nullptr, b, kin, kout, s.p, order.p, m, 0, end_bit),
+          "cub::DeviceRadixSort::SortPairs (size)");
+      return b;
+    });
     QDEMSPH_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(cuda_temp_storage(bytes), bytes, kin, kout,
                                                        s.p, order.p, n, 0, end_bit),
                        "cub::DeviceRadixSort::SortPairs");
