@@ -158,16 +158,11 @@ class Backend {
   // max |x_i - x_i at the last mark_positions()| over the free vertices (how far owned
   // vertices moved since the decomposition was rebuilt). The reference is allocated on the
   // first mark, so a run that never marks pays nothing. queue_max_moved() queues it (on a GPU
-  // without waiting: the halo's packing and the interior tets can be queued behind it);
-  // max_moved() waits for the value queued last.
+  // without waiting: the halo's packing and the interior tets can be queued behind it or
+  // beside it, SideQueue); max_moved() waits for the value queued last.
   virtual void mark_positions() = 0;
   virtual void queue_max_moved() = 0;
   virtual double max_moved() = 0;
-  // drift(h), then queue_max_moved(): in one pass over the vertices where the backend can.
-  virtual void drift_and_queue_max_moved(double h) {
-    drift(h);
-    queue_max_moved();
-  }
   // Enables the fluid coupling force fc (zero until the fluid writes it); views stay valid
   // until the next upload.
   virtual SolidViews solid_views();

@@ -583,25 +583,6 @@ class QdemBackend final : public Backend {
         Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) { return norm(x[i] - xm[i]); }, 0.0, out);
     if constexpr (S == Space::Cuda) moved_mark_.record();
   }
-  // The drift's kernel is the reduction's (x is written as it is measured): on a GPU one
-  // launch and one read of x fewer at the start of a distributed step, where the device waits
-  // for the host's launches.
-  void drift_and_queue_max_moved(double h) override {
-    if (xmark_.size() != nv_) return Backend::drift_and_queue_max_moved(h);
-    moved_.resize(sizeof(double));
-    const auto v = v_.cview();
-    const auto x = x_.view();
-    const auto xm = xmark_.cview();
-    reduce_max_to(
-        Exec{}, nfv_,
-        QDEMSPH_LAMBDA(std::int64_t i) {
-          const Vec3 xi = x[i] + h * v[i];
-          x.set(i, xi);
-          return norm(xi - xm[i]);
-        },
-        0.0, reinterpret_cast<double*>(moved_.data()));
-    if constexpr (S == Space::Cuda) moved_mark_.record();
-  }
   double max_moved() override {
     moved_mark_.wait();
     return moved_.size() == sizeof(double) ? *reinterpret_cast<const double*>(moved_.data()) : 0;

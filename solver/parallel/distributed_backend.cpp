@@ -188,19 +188,16 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     PhaseTimers untimed;
     PhaseTimers& tm = dynamic ? timers_ : untimed;
     // The skin test's reduction, the halo's packing and the interior tets are queued before the
-    // ranks agree on the test: on a GPU they run meanwhile (the reduction usually queued by
-    // drift already, and then the packing after the interior tets, from the drift's mark). A
-    // rebuild finishes the exchange and starts again on the new layout (the interior tets
-    // queued so far are computed again).
+    // ranks agree on the test: on a GPU they run meanwhile (when drift marked its end, the
+    // reduction and the packing are queued after the interior tets, from that mark). A rebuild
+    // finishes the exchange and starts again on the new layout (the interior tets queued so far
+    // are computed again).
     const bool drifted = queued_;
     queued_ = false;
-    if (!drifted) {
-      queue_skin(tm);
-      queue_pack(tm);
-    }
+    if (!drifted) queue_skin_and_pack(tm, true);
     start_halo(tm, dt_diss, drifted ? &drifted_ : nullptr);
     if (maybe_rebuild(dynamic)) {
-      queue_pack(tm);
+      queue_skin_and_pack(tm, false);
       start_halo(tm, dt_diss);
     }
     CommEngine& e = halo_->engine();
@@ -259,13 +256,13 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     auto s = timers_.launch("integration");
     local_->kick(h);
   }
-  // On a GPU the next force evaluation's skin-test reduction is the drift's own kernel
-  // (drift_and_queue_max_moved), and the halo's packing starts from its mark (drifted_): the
-  // interior tets, which compute_forces queues first, follow the drift on the device without
-  // waiting for the packing's launches (cube block, 4 GPUs: the host launched the interior tets
-  // ~35 us after a step's start, against ~15 us on one GPU). The scope does not synchronise (the
-  // skin test and the exchange wait for their own marks); the drift's device time counts in the
-  // halo's scopes.
+  // On a GPU the drift marks its end (drifted_), where the next force evaluation's skin-test
+  // reduction and halo packing start on the side stream: the interior tets, which
+  // compute_forces queues first, follow the drift on the device without waiting for those
+  // launches or kernels (cube block, 4 GPUs: the host launched the interior tets ~35 us after a
+  // step's start while it launched the packing first, against ~15 us on one GPU). The scope
+  // does not synchronise (the skin test and the exchange wait for their own marks); the drift's
+  // device time counts in the halo's scopes.
   void drift(double h) override {
     if (!device_halo()) {
       auto s = timers_.scope("integration");
@@ -273,10 +270,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       return;
     }
     auto s = timers_.launch("integration");
-    if (contact_)
-      local_->drift_and_queue_max_moved(h);
-    else
-      local_->drift(h);
+    local_->drift(h);
     drifted_.record();
     queued_ = true;
   }
@@ -914,29 +908,26 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   // The halo's records stay on the GPUs (CommEngine::use_device).
   bool device_halo() const { return halo_ && halo_->engine().packed_space() == Space::Cuda; }
 
-  // The skin test's reduction (contact band: how far a vertex moved since the layout).
-  void queue_skin(PhaseTimers& tm) {
-    if (!contact_) return;
-    auto s = tm.launch("halo");
-    auto s1 = tm.launch("halo.skin");
-    local_->queue_max_moved();
-  }
-
-  // x, v of the owned vertices other ranks need, packed (on a GPU, queued on the side stream,
-  // beside the interior tets, which do not wait for it; from `after`, else from the work queued
-  // so far): what start_halo sends.
-  void queue_pack(PhaseTimers& tm, const DeviceMark* after = nullptr) {
+  // The skin test's reduction when `skin` (contact band: how far a vertex moved since the
+  // layout), and x, v of the owned vertices other ranks need packed: what start_halo sends. On
+  // a GPU on the side stream, beside the interior tets, which do not wait for them; from
+  // `after`, else from the work queued so far.
+  void queue_skin_and_pack(PhaseTimers& tm, bool skin, const DeviceMark* after = nullptr) {
     CommEngine& e = halo_->engine();
     auto s = tm.launch("halo");
-    auto s1 = tm.launch("halo.xv");
     auto buf = e.packed_send_buffer(6 * sizeof(double));
     SideQueue side(device_halo(), after);
+    if (skin && contact_) {
+      auto s1 = tm.launch("halo.skin");
+      local_->queue_max_moved();
+    }
+    auto s1 = tm.launch("halo.xv");
     local_->pack_halo(reinterpret_cast<double*>(buf.data()), e.packed_space());
     e.mark_packed();
   }
 
-  // Starts the exchange of what queue_pack packed (`drift`: packs it first, from the drift's
-  // mark, on a GPU), and queues the interior tets (their vertices are all owned): on a GPU they
+  // Starts the exchange of what queue_skin_and_pack packed (`drift`: queues it first, from the
+  // drift's mark, on a GPU), and queues the interior tets (their vertices are all owned): on a GPU they
   // run while the records are copied (on the copy stream) and unpacked; with the boundary tets
   // queued after the halo, their device time counts in the contact stage's first synchronised
   // phase (contact.broad), as on one process. Records staged through the host are posted
@@ -956,7 +947,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       local_->element_forces(0, L_.n_interior, dt_diss, true);
     }
     if (device) {
-      if (drift) queue_pack(tm, drift);
+      if (drift) queue_skin_and_pack(tm, true, drift);
       auto s = tm.launch("halo");
       auto s1 = tm.launch("halo.xv");
       e.begin_packed();
@@ -1572,8 +1563,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   std::unique_ptr<MigratePlan> vertex_plan_, history_plan_;
   std::unique_ptr<CommEngine> tet_plan_;
   bool contact_ = false, preload_ = false, relaxing_ = false;
-  // The skin test for the next force evaluation is queued and the drift's end marked (drift on
-  // a GPU: the halo's packing starts there); a new layout (install) drops them.
+  // The drift's end is marked for the next force evaluation (drift on a GPU: its skin test and
+  // the halo's packing start there); a new layout (install) drops it.
   bool queued_ = false;
   DeviceMark drifted_;
   double band_ = 1, slack_ = 0;

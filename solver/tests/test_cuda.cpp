@@ -259,40 +259,6 @@ TEST(Cuda, QueuedMaxMovedMatchesCpu) {
   }
 }
 
-// The drift with the skin test's reduction in its kernel (distributed GPU runs): the same
-// positions, bit for bit, and the same displacement as drift then queue_max_moved, on each
-// backend (the host's runs without a GPU). Known answer: the largest |x - x at mark| from the
-// download. Without a mark it only drifts and the displacement is 0.
-TEST(Cuda, DriftWithQueuedMaxMovedIsDriftThenQueue) {
-  const Model m = test_model();
-  std::vector<std::string> names{"cpu"};
-  if (cuda_available()) names.push_back("cuda");
-  for (const std::string& name : names) {
-    SCOPED_TRACE(name);
-    for (const bool marked : {true, false}) {
-      auto fused = make_backend(name), apart = make_backend(name);
-      for (Backend* be : {fused.get(), apart.get()}) {
-        be->upload(m);
-        if (marked) be->mark_positions();
-        be->compute_forces(1e-5, m.mass_damping);
-        be->kick(2e-3);
-      }
-      fused->drift_and_queue_max_moved(4e-3);
-      apart->drift(4e-3);
-      apart->queue_max_moved();
-      const HostFields a = fused->download(false), b = apart->download(false);
-      double want = 0;
-      if (marked)
-        for (std::int64_t i = 0; i < m.n_free_vertices; ++i)
-          want = std::max(want, norm(b.x[i] - m.x[i]));
-      EXPECT_EQ(fused->max_moved(), want);
-      EXPECT_EQ(apart->max_moved(), want);
-      EXPECT_GT(rel_diff(b.x, m.x), 0.0);  // it moved
-      for (std::size_t i = 0; i < a.x.size(); ++i) ASSERT_EQ(norm(a.x[i] - b.x[i]), 0.0) << i;
-    }
-  }
-}
-
 TEST(Cuda, EnergiesMatchCpu) {
   SKIP_WITHOUT_GPU();
   const Model m = test_model();
