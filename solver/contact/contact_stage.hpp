@@ -739,10 +739,10 @@ class ContactStage {
            pen_.bytes() + pet_.bytes() + nen_.bytes() + net_.bytes() + ediss_.bytes() +
            ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() + pr_ref_.bytes() +
            cells_.bytes() + pairs_.bytes() + vgid_.bytes() + edge_anchor_.bytes() +
-           rec_tmp_.bytes() + skey_.bytes() + vrank_.bytes() + sorder_.bytes() + in_.bytes() + base_.bytes() +
-           ekey_.bytes() + share_flag_.bytes() + out_.bytes() + keep_.bytes() + tfirst_.bytes() +
-           tsecond_.bytes() + route_rank_.bytes() + route_index_.bytes() + tri_gid_.bytes() +
-           edge_gid_.bytes();
+           rec_tmp_.bytes() + skey_.bytes() + vrank_.bytes() + sorder_.bytes() + in_.bytes() +
+           base_.bytes() + ekey_.bytes() + share_flag_.bytes() + out_.bytes() + keep_.bytes() +
+           tfirst_.bytes() + tsecond_.bytes() + route_rank_.bytes() + route_index_.bytes() +
+           tri_gid_.bytes() + edge_gid_.bytes();
   }
 
   ContactTopology topology() const {
@@ -1490,8 +1490,8 @@ class ContactStage {
   Buffer<std::uint64_t> skey_{S};  // sort_records: keys and the order, twice n (scratch)
   Buffer<std::int32_t> vrank_{S};  // per vertex its place by global id (sort_key's id1)
   Buffer<std::int32_t> sorder_{S};
-  Buffer<ContactShare> in_{S}, out_{S};    // shares received and to send (add_forces, shares)
-  StagingBytes share_read_, share_write_;  // a GPU's shares on the host: out_'s, in_'s
+  Buffer<ContactShare> in_{S}, out_{S};          // shares received and to send (add_forces, shares)
+  StagingBytes share_read_, share_write_;        // a GPU's shares on the host: out_'s, in_'s
   static constexpr std::size_t kShareHead = 64;  // share_read_: the count, then the shares
   Buffer<std::int32_t> route_rank_{S}, route_index_{S};  // ShareRoutes (set_share_routes)
   Buffer<std::int64_t> tri_gid_{S}, edge_gid_{S};

@@ -71,8 +71,8 @@ class DeviceMark {
 // kernels, reductions, cuda_copy_queued, cuda_zero (Buffer::zero) and DeviceMark::record go to
 // this process's side stream (CUDA sorts and scans do not: they share one scratch), which
 // starts after the default stream's work queued before the scope, or, given `from`, the work
-// queued before that mark was recorded (kernels queued since run beside). The default stream does not
-// wait for the side's work: a DeviceMark recorded inside says when it is done. The side stream
+// queued before that mark was recorded (kernels queued since run beside). The default stream does
+// not wait for the side's work: a DeviceMark recorded inside says when it is done. The side stream
 // has the GPU's greatest priority: its blocks start before the default stream's waiting ones.
 // For short work that the step's next kernels do not read and other ranks wait for (a halo's
 // packing, the contact shares' compaction), off the default stream's path. `on` false, or no

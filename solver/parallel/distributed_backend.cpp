@@ -926,14 +926,14 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     e.mark_packed();
   }
 
-  // Starts the exchange of what queue_skin_and_pack packed (`drift`: queues it first, from the
-  // drift's mark, on a GPU), and queues the interior tets (their vertices are all owned): on a GPU they
-  // run while the records are copied (on the copy stream) and unpacked; with the boundary tets
-  // queued after the halo, their device time counts in the contact stage's first synchronised
-  // phase (contact.broad), as on one process. Records staged through the host are posted
-  // before the interior tets, so that the messages travel meanwhile; device-resident ones
-  // after, begin_packed waiting for the pack only (mark_packed), so that the wait does not
-  // hold the tets back.
+  // Starts the exchange of what queue_skin_and_pack packed (given the drift's mark, on a GPU:
+  // queues that after the interior tets, from the mark), and queues the interior tets (their
+  // vertices are all owned): on a GPU they run while the records are copied (on the copy stream)
+  // and unpacked; with the boundary tets queued after the halo, their device time counts in the
+  // contact stage's first synchronised phase (contact.broad), as on one process. Records staged
+  // through the host are posted before the interior tets, so that the messages travel
+  // meanwhile; device-resident ones after, begin_packed waiting for the pack only
+  // (mark_packed), so that the wait does not hold the tets back.
   void start_halo(PhaseTimers& tm, double dt_diss, const DeviceMark* drift = nullptr) {
     CommEngine& e = halo_->engine();
     const bool device = device_halo();
