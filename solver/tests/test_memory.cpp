@@ -182,6 +182,43 @@ TEST(Memory, CopyStreamCopiesAreDoneAfterTheWait) {
   EXPECT_EQ(b.to_host(), v);
 }
 
+// A SideQueue's work starts after the default stream's work queued before it, or before the
+// DeviceMark it is given: its copy of a buffer that a default-stream copy is filling (32 MiB,
+// ~ms) reads the new contents; work queued on the default stream after the mark does not hold
+// it back. DeviceMark::wait returns once the side's work is done. Not nested.
+TEST(Memory, SideQueueWorkFollowsTheForkPoint) {
+  if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
+  const std::size_t n = std::size_t{1} << 22, bytes = n * sizeof(double);
+  Buffer<double> a(Space::Cuda), other(Space::Cuda, static_cast<std::int64_t>(n));
+  a.assign(std::vector<double>(n, -1.0));
+  StagingBytes fill, back;
+  fill.resize(bytes);
+  back.resize(bytes);
+  for (const bool marked : {true, false}) {
+    SCOPED_TRACE(marked ? "from a mark" : "from now");
+    const double value = marked ? 2.5 : 4.0;
+    double* f = reinterpret_cast<double*>(fill.data());
+    for (std::size_t k = 0; k < n; ++k) f[k] = value + static_cast<double>(k % 7);
+    cuda_sync();
+    cuda_copy_queued(a.view().p, fill.data(), bytes);
+    DeviceMark filled, read;
+    filled.record();
+    if (marked) cuda_copy_queued(other.view().p, fill.data(), bytes);  // after the mark
+    {
+      SideQueue side(true, marked ? &filled : nullptr);
+      EXPECT_THROW(SideQueue(true), std::logic_error);
+      cuda_copy_queued(back.data(), a.cview().p, bytes);
+      read.record();
+    }
+    read.wait();
+    const double* got = reinterpret_cast<const double*>(back.data());
+    std::size_t wrong = 0;
+    for (std::size_t k = 0; k < n; ++k) wrong += got[k] != value + static_cast<double>(k % 7);
+    EXPECT_EQ(wrong, 0u);
+    cuda_sync();
+  }
+}
+
 // Copies between the device and pageable host memory of 4 MiB and more go through two
 // page-locked 8 MiB chunks (memory_cuda.cu): sizes around the threshold and the chunk, and
 // several chunks with a partial last one, arrive whole both ways; a copy from page-locked
