@@ -455,11 +455,12 @@ void CommEngine::exchange_begin(std::span<const std::byte> send,
     throw std::logic_error("comm plan: exchange_begin() while an exchange is in flight");
   if (static_cast<int>(send_off.size()) != size_ + 1 ||
       static_cast<std::size_t>(send_off[size_]) * stride != send.size())
-    throw std::invalid_argument("comm plan: exchange() needs size() + 1 offsets over the records");
+    throw std::invalid_argument(
+        "comm plan: exchange_begin() needs size() + 1 offsets over the records");
   const auto is_nbr = [&](int r) { return std::binary_search(nbrs_.begin(), nbrs_.end(), r); };
   for (int r = 0; r < size_; ++r)
     if (send_off[r + 1] > send_off[r] && r != rank_ && !is_nbr(r))
-      throw std::invalid_argument("comm plan: exchange() to rank " + std::to_string(r) +
+      throw std::invalid_argument("comm plan: exchange_begin() to rank " + std::to_string(r) +
                                   ", not a neighbour");
   // One message a neighbour, of the size its sender knows; the receiver learns it by a matched
   // probe: a single round where counts, then records, took two (on a GPU rank the contact shares
@@ -490,7 +491,7 @@ std::vector<std::byte> CommEngine::exchange_finish() {
     int bytes = 0;
     MPI_Get_count(&st, MPI_BYTE, &bytes);
     if (bytes % static_cast<int>(stride) != 0)
-      throw std::logic_error("comm plan: exchange() got " + std::to_string(bytes) +
+      throw std::logic_error("comm plan: exchange_finish() got " + std::to_string(bytes) +
                              " bytes from rank " + std::to_string(nbrs_[k]) + ", not records of " +
                              std::to_string(stride));
     roff[nbrs_[k] + 1] = bytes / static_cast<std::int64_t>(stride);

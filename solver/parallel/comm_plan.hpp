@@ -178,15 +178,10 @@ class CommEngine {
   // must be a neighbour or this rank. exchange_begin posts the sends (`send` must stay valid
   // until exchange_finish; other work goes on between, e.g. while the neighbours get there),
   // exchange_finish returns the records received, by source rank, then sender order.
-  // last_bytes() becomes the bytes sent. exchange() is the two in one.
+  // last_bytes() becomes the bytes sent.
   void exchange_begin(std::span<const std::byte> send, std::span<const std::int64_t> send_off,
                       std::size_t stride);
   std::vector<std::byte> exchange_finish();
-  std::vector<std::byte> exchange(std::span<const std::byte> send,
-                                  std::span<const std::int64_t> send_off, std::size_t stride) {
-    exchange_begin(send, send_off, stride);
-    return exchange_finish();
-  }
 
   std::int64_t n_send() const { return static_cast<std::int64_t>(send_index_.size()); }
   std::int64_t n_recv() const { return recv_off_.back(); }

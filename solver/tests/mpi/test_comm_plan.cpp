@@ -531,8 +531,9 @@ class RankFailurePrinter : public ::testing::EmptyTestEventListener {
 
 }  // namespace
 
-// exchange(): each neighbour's records arrive whole, by source rank (this rank's own among
-// them), however many there are, none included (one message a neighbour, sized by a probe).
+// exchange_begin / exchange_finish: each neighbour's records arrive whole, by source rank (this
+// rank's own among them), however many there are, none included (one message a neighbour, sized by
+// a probe).
 TEST(HaloPlan, VariableLengthExchangeBySourceRank) {
   HaloSetup s = halo_setup();
   CommEngine& e = s.plan->engine();
@@ -552,7 +553,8 @@ TEST(HaloPlan, VariableLengthExchangeBySourceRank) {
     off[r + 1] = static_cast<std::int64_t>(send.size());
   }
   for (int round = 0; round < 2; ++round) {  // twice: no message of the first left over
-    const std::vector<std::byte> in = e.exchange(std::as_bytes(std::span(send)), off, sizeof(Rec));
+    e.exchange_begin(std::as_bytes(std::span(send)), off, sizeof(Rec));
+    const std::vector<std::byte> in = e.exchange_finish();
     std::vector<Rec> want;
     for (const int r : dest)
       for (int k = 0; k < count(r, me); ++k) want.push_back({r, me, k});
