@@ -183,27 +183,32 @@ TEST(Memory, CopyStreamCopiesAreDoneAfterTheWait) {
 }
 
 // A SideQueue's work starts after the default stream's work queued before it, or before the
-// DeviceMark it is given: its copy of a buffer that a default-stream copy is filling (32 MiB,
-// ~ms) reads the new contents; work queued on the default stream after the mark does not hold
-// it back. DeviceMark::wait returns once the side's work is done. Not nested.
+// DeviceMark it is given: its copy of a buffer that the default stream writes after a long copy
+// (256 MiB, ~10 ms, into another buffer) reads the new contents, where a side stream that did
+// not wait would read the old ones at once; work queued on the default stream after the mark
+// does not matter. DeviceMark::wait returns once the side's work is done. Not nested.
 TEST(Memory, SideQueueWorkFollowsTheForkPoint) {
   if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
-  const std::size_t n = std::size_t{1} << 22, bytes = n * sizeof(double);
-  Buffer<double> a(Space::Cuda), other(Space::Cuda, static_cast<std::int64_t>(n));
+  const std::size_t n = std::size_t{1} << 16, bytes = n * sizeof(double);
+  const std::size_t big = std::size_t{1} << 28;
+  Buffer<double> a(Space::Cuda);
+  Buffer<std::byte> slow(Space::Cuda, static_cast<std::int64_t>(big));
   a.assign(std::vector<double>(n, -1.0));
-  StagingBytes fill, back;
+  StagingBytes fill, back, load;
   fill.resize(bytes);
   back.resize(bytes);
+  load.resize(big);
   for (const bool marked : {true, false}) {
     SCOPED_TRACE(marked ? "from a mark" : "from now");
     const double value = marked ? 2.5 : 4.0;
     double* f = reinterpret_cast<double*>(fill.data());
     for (std::size_t k = 0; k < n; ++k) f[k] = value + static_cast<double>(k % 7);
     cuda_sync();
+    cuda_copy_queued(slow.view().p, load.data(), big);
     cuda_copy_queued(a.view().p, fill.data(), bytes);
     DeviceMark filled, read;
     filled.record();
-    if (marked) cuda_copy_queued(other.view().p, fill.data(), bytes);  // after the mark
+    if (marked) cuda_copy_queued(slow.view().p, load.data(), big);  // after the mark
     {
       SideQueue side(true, marked ? &filled : nullptr);
       EXPECT_THROW(SideQueue(true), std::logic_error);
