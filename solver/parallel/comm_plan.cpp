@@ -218,6 +218,7 @@ void CommEngine::mark_packed() {
 }
 
 void CommEngine::post_device() {
+  no_exchange_in_flight();
   settle_copied();
   // The caller's records are in dsend_ before any receiver copies them.
   if (marked_)
@@ -272,6 +273,12 @@ std::span<const std::byte> CommEngine::finish_device() {
   in_flight_ = false;
   seconds_.wait += MPI_Wtime() - t0;
   return {recv, stride_ * static_cast<std::size_t>(n_recv())};
+}
+
+// The halo's exchanges and exchange_begin's share reqs_: one at a time.
+void CommEngine::no_exchange_in_flight() const {
+  if (exchanging_)
+    throw std::logic_error("comm plan: a halo exchange while exchange_begin()'s is in flight");
 }
 
 void CommEngine::settle_copied() {
@@ -340,6 +347,7 @@ std::int64_t CommEngine::buffer_slot(std::int64_t k, const std::vector<std::int6
 }
 
 void CommEngine::post(Dir dir, bool self) {
+  no_exchange_in_flight();
   const double t0 = MPI_Wtime();
   const bool fwd = dir == Dir::Forward;
   const std::vector<std::int64_t>& so = fwd ? send_off_ : recv_off_;

@@ -224,6 +224,7 @@ class CommEngine {
   // and the wait for them (the neighbours have copied this rank's records).
   std::vector<MPI_Request> copied_;
   void settle_copied();
+  void no_exchange_in_flight() const;
   std::vector<char> on_node_;  // per rank: on this node (use_device)
   bool all_ranks(bool mine);   // mine on every rank (collective)
   bool neighbours_on_node() const;

@@ -192,8 +192,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     // reduction and the packing are queued after the interior tets, from that mark). A rebuild
     // finishes the exchange and starts again on the new layout (the interior tets queued so far
     // are computed again).
-    const bool drifted = queued_;
-    queued_ = false;
+    const bool drifted = drift_marked_;
+    drift_marked_ = false;
     if (!drifted) queue_skin_and_pack(tm, true);
     start_halo(tm, dt_diss, drifted ? &drifted_ : nullptr);
     if (maybe_rebuild(dynamic)) {
@@ -272,7 +272,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     auto s = timers_.launch("integration");
     local_->drift(h);
     drifted_.record();
-    queued_ = true;
+    drift_marked_ = true;
   }
   void damped_step(double dt, double c) override {
     auto s = timers_.scope("integration");
@@ -1258,7 +1258,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   // tet it will hold in any order, its contact history) and uploads it; the backend's and the
   // halo plan's arrays take room from their first allocation (BufferRoom).
   void install(const StateSlice& s) {
-    queued_ = false;
+    drift_marked_ = false;
     const BufferRoom room;
     std::optional<PhaseTimers::Scope> part;
     part.emplace(timers_, "migration.layout");
@@ -1565,7 +1565,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   bool contact_ = false, preload_ = false, relaxing_ = false;
   // The drift's end is marked for the next force evaluation (drift on a GPU: its skin test and
   // the halo's packing start there); a new layout (install) drops it.
-  bool queued_ = false;
+  bool drift_marked_ = false;
   DeviceMark drifted_;
   double band_ = 1, slack_ = 0;
   double reach_ = 0, slack0_ = 0;          // diam + D_DEM; the first slack (set_slack)
