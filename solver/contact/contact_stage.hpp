@@ -19,14 +19,14 @@
 //     D_DEM at the two surface points, tangential history looked up by key (binary search
 //     in the previous step's sorted keys), force distributed by weights (a gap below -D_DEM
 //     counts only for a feature pair that was in contact the step before: the back face of
-//     a thin body is not a penetration); a per-vertex gather (add_forces: count, scan, fill,
-//     segment sort by record key, then slot) adds it to f in a fixed order (deterministic);
+//     a thin body is not a penetration); a per-vertex gather (gather_local: count, scan,
+//     fill, segment sort by record key, then slot) sums each vertex's entries in a fixed order
+//     (deterministic), which the element forces' gather adds to f (sums());
 //     on an MPI rank, which evaluates only the records anchored at its owned vertices
 //     (Evaluator; all those of two bodies when one is whole there and leads, face_leads),
 //     the shares of other ranks' vertices leave by shares() (keyed in global ids and
-//     addressed to the owner's index: set_share_routes; each vertex's own entries are summed
-//     meanwhile) and arrive at their owners' add_forces, which merges them with the vertex's
-//     own entries by key: the one-rank order;
+//     addressed to the owner's index: set_share_routes) and arrive at their owners'
+//     add_forces, which merges them with the vertex's own entries by key: the one-rank order;
 //  4. energy: the springs' stored energy and the step's dissipation per contact
 //     (physics/contact_law.hpp, contact_energy; the non-potential force h is history like the
 //     spring), plus, for touches that ended, their spring energy and the second half of their
@@ -509,7 +509,6 @@ class ContactStage {
   // run_scene can report "elements" without contact.
   void evaluate(Vec3CView x, Vec3CView v, double dt) {
     timed_ = dt > 0;
-    local_sorted_ = false;
     PhaseTimers scratch;
     PhaseTimers& tm = timed_ ? timers_ : scratch;
     std::int64_t npairs = 0;
@@ -526,6 +525,7 @@ class ContactStage {
       auto scope = tm.scope("contact.force");
       forces(v, dt, nc);
     }
+    gather_local();  // queued: its device time counts in the element gather's scope
     stats_.pairs = npairs;
     stats_.contacts = nc;
     ++steps_;
@@ -558,31 +558,37 @@ class ContactStage {
       return {out_.cview().p, static_cast<std::size_t>(n)};
   }
 
-  // Each vertex's own entries sorted and summed (gather_local), queued: on a GPU rank they run
-  // while the ranks exchange the shares. A vertex no other rank holds gets its sum in f now;
-  // add_forces merges the others' with what arrives (and queues these sums if not done yet).
-  void queue_sums(Vec3View f) {
-    if (!local_sorted_) gather_local(f);
-  }
+  // What the element forces' gather adds to each free vertex's force f_i (computed before it):
+  // the sum of its contact entries of the last evaluation, in key order (-0, which adds
+  // nothing, where it has none), f_i + sum[i]; on an MPI rank a share target's f_i is kept in
+  // base (target[i] != 0; keep_base false without ghosts), from which add_forces sums it again
+  // with the shares other ranks send.
+  struct Sums {
+    Vec3CView sum;
+    View<const std::uint8_t> target;
+    Vec3View base;
+    bool keep_base = false;
+  };
+  Sums sums() { return {sum_.cview(), share_flag_.cview(), base_.view(), ghosts_}; }
 
-  // f[i] += contact force on vertex i, for free vertices i < n_free_vertices, of the last
-  // evaluation and of `in`: shares other ranks evaluated for this rank's vertices, as they
-  // arrive (only for share targets). Each vertex sums its entries sorted by record key, then
-  // slot: the one-rank order (deterministic, no atomics in the sums).
+  // On an MPI rank, the shares other ranks evaluated for this rank's vertices, as they arrive
+  // (`in`, only for share targets), after the element gather added sums(): each target that got
+  // some has f = base + its entries and shares merged in key order (the one-rank order: no
+  // atomics in the sums). On a GPU the merge runs on the side stream from the end of
+  // gather_local, beside the element gather; the last kernel adds its sums. Nothing to add on
+  // one process.
   void add_forces(Vec3View f, std::span<const ContactShare> in = {}) {
     PhaseTimers scratch;
     auto scope = (timed_ ? timers_ : scratch).scope("contact.force");
     if (!ghosts_ && !in.empty())
       throw std::logic_error("contact shares for a model without ghosts");
-    if (!local_sorted_) gather_local(f);
     if (ghosts_) merge_shares(f, in);
-    local_sorted_ = false;
   }
 
   // The owned vertices other ranks may send shares for: those they hold (an MPI rank's halo
-  // sends them; duplicates and ghosts ignored). gather_local keeps their force without contact
-  // (base_), so that merge_shares can sum a vertex's entries and shares in the one-process
-  // order. upload() makes every owned vertex a target.
+  // sends them; duplicates and ghosts ignored). The element gather keeps their force without
+  // contact (Sums::base), so that merge_shares can sum a vertex's entries and shares in the
+  // one-process order. upload() makes every owned vertex a target.
   void set_share_targets(const std::vector<std::int64_t>& held_elsewhere) {
     std::vector<std::uint8_t> flag(nfv_, 0);
     for (const std::int64_t i : held_elsewhere)
@@ -740,9 +746,9 @@ class ContactStage {
            ph_.bytes() + nh_.bytes() + prec_.bytes() + pc_ref_.bytes() + pr_ref_.bytes() +
            cells_.bytes() + pairs_.bytes() + vgid_.bytes() + edge_anchor_.bytes() +
            rec_tmp_.bytes() + skey_.bytes() + vrank_.bytes() + sorder_.bytes() + in_.bytes() +
-           base_.bytes() + ekey_.bytes() + share_flag_.bytes() + out_.bytes() + keep_.bytes() +
-           tfirst_.bytes() + tsecond_.bytes() + route_rank_.bytes() + route_index_.bytes() +
-           tri_gid_.bytes() + edge_gid_.bytes();
+           sum_.bytes() + base_.bytes() + msum_.bytes() + ekey_.bytes() + share_flag_.bytes() +
+           out_.bytes() + keep_.bytes() + tfirst_.bytes() + tsecond_.bytes() + route_rank_.bytes() +
+           route_index_.bytes() + tri_gid_.bytes() + edge_gid_.bytes();
   }
 
   ContactTopology topology() const {
@@ -1246,20 +1252,22 @@ class ContactStage {
   }
 
   // Each vertex's entries of the last evaluation sorted by record key, then slot (count, scan,
-  // fill, sort) and summed into f; on an MPI rank a share target's force before that sum is
-  // kept in base_ (other ranks' shares may follow: merge_shares).
-  void gather_local(Vec3View f) {
+  // fill, sort) and summed into sum_ (sums()). On an MPI rank its end is marked (summed_): the
+  // merge of the shares starts there (merge_shares), beside the element gather.
+  void gather_local() {
     const std::int64_t ne = 4 * n_prev_;
     fit_count(vent_, ne);
-    if (ghosts_ && base_.size() < nfv_) base_.resize(nfv_);
+    sum_.resize(nfv_);
+    if (ghosts_) {
+      if (base_.size() < nfv_) base_.resize(nfv_);
+      fit_count(ekey_, ne);  // merge_shares fills it, on the side stream
+    }
     const auto ev = ent_v_.cview();
     const auto ef = ent_f_.cview();
     const auto vcnt = vcnt_.view();
     const auto vcur = vcur_.view();
     const auto vent = vent_.view();
-    const auto base = base_.view();
-    const auto target = share_flag_.cview();
-    const bool ghosts = ghosts_;
+    const auto sum = sum_.view();
     vcnt_.zero();  // memset: no parallel region for a loop without work
     vcur_.zero();
     for_each(
@@ -1278,8 +1286,6 @@ class ContactStage {
     for_each(
         Exec{}, nfv_, QDEMSPH_LAMBDA(std::int64_t i) {
           const int b = vcnt[i], e = vcnt[i + 1];
-          if (ghosts && target[i]) base.set(i, f[i]);
-          if (b == e) return;
           for (int k = b + 1; k < e; ++k) {
             const int val = vent[k];
             int j = k - 1;
@@ -1291,23 +1297,10 @@ class ContactStage {
           }
           Vec3 s{};
           for (int k = b; k < e; ++k) s += ef[vent[k]];
-          f.set(i, f[i] + s);
+          sum.set(i, b < e ? s : Vec3{-0.0, -0.0, -0.0});  // x + -0 is x, bit for bit
         });
-    // A share target's entries' keys in global ids, which merge_shares compares with the shares:
-    // a thread an entry here, where each vertex's merge had waited for a chain of dependent
-    // loads a key (that kernel: 39 us of a 4-GPU step on an H200, on the step's critical path).
-    if (ghosts) {
-      fit_count(ekey_, ne);
-      const auto ekey = ekey_.view();
-      const ShareKeys key{pk1_.cview(), pk2_.cview(), tri_gid_.cview(), edge_gid_.cview()};
-      const std::int64_t nfv = nfv_;
-      for_each(
-          Exec{}, ne, QDEMSPH_LAMBDA(std::int64_t e) {
-            const int i = ev[e];
-            if (i >= 0 && i < nfv && target[i]) ekey[e] = key(e);
-          });
-    }
-    local_sorted_ = true;
+    if constexpr (S == Space::Cuda)
+      if (ghosts_) summed_.record();
   }
 
   // The entries [0, ne) of free vertices held but not owned, as shares (keys k1, k2 of record
@@ -1357,16 +1350,19 @@ class ContactStage {
 
   // Each vertex that other ranks sent shares for: f = its force before contact (base_) + its
   // entries and those shares merged in key order and summed (the one-rank order); every other
-  // vertex has its sum from gather_local. The host groups the shares by vertex (linked through
-  // share_head_, O(n)), sorts each vertex's few by key and queues their copy; on the device a
-  // thread a vertex walks its entries (in key order, with their keys in gather_local's ekey_)
-  // and its shares side by side.
+  // vertex has its sum from the element gather. The host groups the shares by vertex (linked
+  // through share_head_, O(n)), sorts each vertex's few by key and queues their copy; on the
+  // device a thread a vertex walks its entries (in key order, with their keys in ekey_) and its
+  // shares side by side into msum_, on the side stream from gather_local's end (summed_), beside
+  // the element gather (cube block, 4 x H200: the merge had followed it, ~20 us on the step's
+  // path); the default stream then adds base_ + msum_.
   void merge_shares(Vec3View f, std::span<const ContactShare> in) {
     const auto nin = static_cast<std::int64_t>(in.size());
     for (const ContactShare& c : in)
       if (c.vertex < 0 || c.vertex >= nfv_ || !share_host_[c.vertex])
         throw std::logic_error("contact share for vertex " + std::to_string(c.vertex) +
                                ", which is not a share target of this rank");
+    if (nin == 0) return;
     share_next_.resize(static_cast<std::size_t>(nin));
     share_first_.clear();
     for (std::int64_t m = 0; m < nin; ++m) {
@@ -1375,10 +1371,11 @@ class ContactStage {
       share_next_[m] = h;
       h = static_cast<std::int32_t>(m);
     }
-    // A grown in_ is new memory from the default stream's pool: only that stream may write it
-    // before the two streams have met.
-    const bool grows = in_.size() < nin;
+    // Grown arrays are new memory from the default stream's pool: the side stream may use them
+    // only from a point the default stream reached after their allocation (now, not summed_).
+    const bool grows = in_.size() < nin || msum_.size() < nin;
     fit_count(in_, nin);
+    fit_count(msum_, nin);
     ContactShare* grouped = in_.view().p;
     if constexpr (S == Space::Cuda) {
       fit_count(share_write_, static_cast<std::int64_t>(sizeof(ContactShare)) * nin);
@@ -1392,48 +1389,64 @@ class ContactStage {
       std::sort(grouped + first, grouped + j,
                 [](const ContactShare& a, const ContactShare& b) { return share_less(a, b); });
     }
-    // On the copy stream, the copy overlaps the element gather and the contact sums queued
-    // before it; the merge waits for it (cube block, 4 x H100: it had run after them, 16 us on
-    // the step's critical path).
-    if constexpr (S == Space::Cuda) {
-      if (nin > 0 && grows) {
-        cuda_copy_queued(in_.view().p, grouped, sizeof(ContactShare) * nin);
-      } else if (nin > 0) {
-        cuda_copy_async(in_.view().p, grouped, sizeof(ContactShare) * nin);
-        cuda_copy_fence();
-      }
-    }
     const auto shares = in_.cview();
+    const auto msum = msum_.view();
+    const auto ev = ent_v_.cview();
     const auto ef = ent_f_.cview();
     const auto vcnt = vcnt_.cview();
     const auto vent = vent_.cview();
     const auto base = base_.cview();
-    const auto ekey = ekey_.cview();
+    const auto target = share_flag_.cview();
+    {
+      SideQueue side(S == Space::Cuda, grows ? nullptr : &summed_);
+      if constexpr (S == Space::Cuda)
+        cuda_copy_queued(in_.view().p, grouped, sizeof(ContactShare) * nin);
+      // A share target's entries' keys in global ids, which the merge compares with the shares:
+      // a thread an entry here, where each vertex's merge had waited for a chain of dependent
+      // loads a key (that kernel: 39 us of a 4-GPU step on an H200, on the step's critical path).
+      const auto ekey = ekey_.view();
+      const ShareKeys key{pk1_.cview(), pk2_.cview(), tri_gid_.cview(), edge_gid_.cview()};
+      const std::int64_t nfv = nfv_;
+      for_each(
+          Exec{}, 4 * n_prev_, QDEMSPH_LAMBDA(std::int64_t e) {
+            const int i = ev[e];
+            if (i >= 0 && i < nfv && target[i]) ekey[e] = key(e);
+          });
+      const auto ekc = ekey_.cview();
+      for_each(
+          Exec{}, nin, QDEMSPH_LAMBDA(std::int64_t lo) {
+            const int i = shares[lo].vertex;
+            if (lo > 0 && shares[lo - 1].vertex == i) return;  // the thread of its first share
+            std::int64_t c = lo;
+            Vec3 s{};
+            const int e = vcnt[i + 1];
+            for (int a = vcnt[i]; a < e; a += kMergeChunk) {
+              ContactShare k8[kMergeChunk];
+              QDEMSPH_UNROLL
+              for (int k = 0; k < kMergeChunk; ++k)
+                if (a + k < e) {
+                  const ContactShare& ek = ekc[vent[a + k]];
+                  k8[k].k1 = ek.k1, k8[k].k2 = ek.k2, k8[k].slot = ek.slot;
+                }
+              QDEMSPH_UNROLL
+              for (int k = 0; k < kMergeChunk; ++k)
+                if (a + k < e) {
+                  for (; c < nin && shares[c].vertex == i && !share_less(k8[k], shares[c]); ++c)
+                    s += shares[c].f;
+                  s += ef[vent[a + k]];
+                }
+            }
+            for (; c < nin && shares[c].vertex == i; ++c) s += shares[c].f;
+            msum.set(lo, s);
+          });
+      if constexpr (S == Space::Cuda) merged_.record();
+    }
+    merged_.follow();
+    const auto msc = msum_.cview();
     for_each(
         Exec{}, nin, QDEMSPH_LAMBDA(std::int64_t lo) {
           const int i = shares[lo].vertex;
-          if (lo > 0 && shares[lo - 1].vertex == i) return;  // the thread of its first share
-          std::int64_t c = lo;
-          Vec3 s{};
-          const int e = vcnt[i + 1];
-          for (int a = vcnt[i]; a < e; a += kMergeChunk) {
-            ContactShare key[kMergeChunk];
-            QDEMSPH_UNROLL
-            for (int k = 0; k < kMergeChunk; ++k)
-              if (a + k < e) {
-                const ContactShare& ek = ekey[vent[a + k]];
-                key[k].k1 = ek.k1, key[k].k2 = ek.k2, key[k].slot = ek.slot;
-              }
-            QDEMSPH_UNROLL
-            for (int k = 0; k < kMergeChunk; ++k)
-              if (a + k < e) {
-                for (; c < nin && shares[c].vertex == i && !share_less(key[k], shares[c]); ++c)
-                  s += shares[c].f;
-                s += ef[vent[a + k]];
-              }
-          }
-          for (; c < nin && shares[c].vertex == i; ++c) s += shares[c].f;
-          f.set(i, base[i] + s);
+          if (lo == 0 || shares[lo - 1].vertex != i) f.set(i, base[i] + msc[lo]);
         });
   }
 
@@ -1495,15 +1508,17 @@ class ContactStage {
   static constexpr std::size_t kShareHead = 64;  // share_read_: the count, then the shares
   Buffer<std::int32_t> route_rank_{S}, route_index_{S};  // ShareRoutes (set_share_routes)
   Buffer<std::int64_t> tri_gid_{S}, edge_gid_{S};
-  Vec3Buffer base_{S};  // an MPI rank's share targets' force before contact (gather_local)
+  Vec3Buffer sum_{S};   // each free vertex's contact entries summed (gather_local, sums())
+  Vec3Buffer base_{S};  // an MPI rank's share targets' force before contact (sums())
+  Vec3Buffer msum_{S};  // per vertex with shares, at its first: the merged sum (merge_shares)
   Buffer<std::uint8_t> share_flag_{S};  // per owned vertex: a share target (set_share_targets)
-  Buffer<ContactShare> ekey_{S};  // a share target's entries' keys, in global ids (gather_local)
+  Buffer<ContactShare> ekey_{S};  // a share target's entries' keys, in global ids (merge_shares)
   // merge_shares' grouping: per owned vertex its last share (-1: none), per share the vertex's
   // one before, the vertices with shares.
   std::vector<std::int32_t> share_head_, share_next_, share_first_;
   std::vector<std::uint8_t> share_host_;  // share_flag_ on the host (merge_shares checks)
-  bool local_sorted_ = false;             // gather_local ran for the last evaluation
   DeviceMark shares_mark_;                // after the shares' compaction and copy (queue_shares)
+  DeviceMark summed_, merged_;          // after gather_local; after merge_shares' side stream work
   Buffer<int> keep_{S};                 // flags and their scan (keep_evaluated, order_border_last)
   Buffer<int> tfirst_{S}, tsecond_{S};  // the narrow phase's pair order on a rank with ghosts
   bool timed_ = false;                  // the last evaluation was a dynamic step

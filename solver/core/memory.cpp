@@ -27,7 +27,6 @@ bool cuda_available() { return false; }
 void cuda_sync() {}
 void cuda_copy_async(void*, const void*, std::size_t) { no_cuda(); }
 void cuda_copy_wait() {}
-void cuda_copy_fence() { no_cuda(); }
 void cuda_copy_queued(void*, const void*, std::size_t) { no_cuda(); }
 SideQueue::SideQueue(bool on, const DeviceMark*) : on_(on) {
   if (on_) no_cuda();
@@ -36,6 +35,7 @@ SideQueue::~SideQueue() = default;
 DeviceMark::~DeviceMark() = default;
 void DeviceMark::record() { no_cuda(); }
 void DeviceMark::wait() {}
+void DeviceMark::follow() {}
 CudaIpcHandle cuda_ipc_handle(void*) { no_cuda(); }
 void* cuda_ipc_open(const CudaIpcHandle&) { no_cuda(); }
 void cuda_ipc_close(void*) noexcept {}

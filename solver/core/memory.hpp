@@ -41,9 +41,6 @@ void cuda_sync();
 // peer copies overlap the interior work. cuda_copy_wait returns when those copies are done.
 void cuda_copy_async(void* dst, const void* src, std::size_t bytes);
 void cuda_copy_wait();
-// The default stream's work queued from now on waits for the copy stream's copies queued so far
-// (an event between the streams; the host does not wait).
-void cuda_copy_fence();
 // A copy between page-locked host memory and this process's device memory (either way), queued
 // on the default stream (the side stream in a SideQueue): after the kernels queued so far,
 // before those queued later. It returns at once; the bytes are there once a DeviceMark recorded
@@ -51,8 +48,10 @@ void cuda_copy_fence();
 void cuda_copy_queued(void* dst, const void* src, std::size_t bytes);
 // A point in this process's default-stream work (a CUDA event; the side stream's in a
 // SideQueue): record() after the work queued so far, wait() returns once that work is done
-// while work queued later runs on. wait() before any record() returns at once. Only for device
-// work: record() makes the process's GPU context.
+// while work queued later runs on; follow() makes the work queued from now on wait for that
+// work on the device (the host does not wait: a side stream's result joins the default
+// stream). wait() and follow() before any record() do nothing. Only for device work: record()
+// makes the process's GPU context.
 class DeviceMark {
  public:
   DeviceMark() = default;
@@ -61,6 +60,7 @@ class DeviceMark {
   DeviceMark& operator=(const DeviceMark&) = delete;
   void record();
   void wait();
+  void follow();
 
  private:
   friend class SideQueue;

@@ -302,16 +302,6 @@ void cuda_copy_wait() {
   QDEMSPH_CUDA_CHECK(cudaStreamSynchronize(copy_stream()), "cudaStreamSynchronize");
 }
 
-void cuda_copy_fence() {
-  static const cudaEvent_t e = [] {
-    cudaEvent_t t = nullptr;
-    QDEMSPH_CUDA_CHECK(cudaEventCreateWithFlags(&t, cudaEventDisableTiming), "cudaEventCreate");
-    return t;
-  }();
-  QDEMSPH_CUDA_CHECK(cudaEventRecord(e, copy_stream()), "cudaEventRecord (copy stream)");
-  QDEMSPH_CUDA_CHECK(cudaStreamWaitEvent(cudaStreamLegacy, e, 0), "cudaStreamWaitEvent");
-}
-
 void cuda_copy_queued(void* dst, const void* src, std::size_t bytes) {
   QDEMSPH_CUDA_CHECK(cudaMemcpyAsync(dst, src, bytes, cudaMemcpyDefault, cuda_stream()),
                      "cudaMemcpyAsync (queued)");
@@ -363,6 +353,12 @@ void DeviceMark::record() {
   QDEMSPH_CUDA_CHECK(cudaEventRecord(static_cast<cudaEvent_t>(event_), cuda_stream()),
                      "cudaEventRecord");
   pending_ = true;
+}
+
+void DeviceMark::follow() {
+  if (!pending_) return;
+  QDEMSPH_CUDA_CHECK(cudaStreamWaitEvent(cuda_stream(), static_cast<cudaEvent_t>(event_), 0),
+                     "cudaStreamWaitEvent (follow)");
 }
 
 void DeviceMark::wait() {

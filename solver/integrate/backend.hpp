@@ -125,10 +125,11 @@ class Backend {
   // ---- Used by distributed runs (parallel/distributed_backend.hpp) -----------------------
   // compute_forces = element_forces(0, n_free_tets) + assemble_forces + add_contact_forces({}):
   // the element forces of tets [t0, t1) into the corner array, then the contact evaluation
-  // and the gather to vertices, loads and damping, then the contact forces, so that a halo
-  // exchange can overlap the tets whose vertices are all owned, and the contact force shares
-  // of other ranks' vertices (contact_shares(), contact_stage.hpp) can reach their owners,
-  // whose add_contact_forces merges them in the one-rank order, while the gather runs. `undoable`:
+  // and the gather to vertices of loads, damping and each vertex's own contact entries, then
+  // the other ranks' contact forces, so that a halo exchange can overlap the tets whose
+  // vertices are all owned, and the contact force shares of other ranks' vertices
+  // (contact_shares(), contact_stage.hpp) can reach their owners, whose add_contact_forces
+  // merges them in the one-rank order, while the gather runs. `undoable`:
   // the tets' dissipated energy before this evaluation is kept, and undo_dissipation() restores it
   // (a distributed rank queues its interior tets before the ranks agree that the layout stays; a
   // rebuild then discards that evaluation).
@@ -136,11 +137,9 @@ class Backend {
                               bool undoable) = 0;
   virtual void undo_dissipation() = 0;
   virtual void assemble_forces(double dt_dissipation, double mass_damping) = 0;
-  // The shares as they travel (ContactShare; valid until the next call), the sums of this
-  // rank's own contact entries queued (else add_contact_forces queues them), and the shares
-  // that arrived for this rank's vertices. set_share_routes says where they go (a layout's).
+  // The shares as they travel (ContactShare; valid until the next call), and the shares that
+  // arrived for this rank's vertices. set_share_routes says where they go (a layout's).
   virtual std::span<const ContactShare> contact_shares() = 0;
-  virtual void queue_contact_sums() = 0;
   virtual void add_contact_forces(std::span<const ContactShare> in) = 0;
   virtual void set_share_routes(const ShareRoutes& routes) = 0;
   // Halo exchange of x and v by index lists, packed where the data lives (on the GPU for

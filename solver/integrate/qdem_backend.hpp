@@ -182,12 +182,16 @@ class QdemBackend final : public Backend {
     undo_ = {0, 0};
   }
 
-  // The contact evaluation (x, v only) first, the element forces' gather after it: on a GPU
-  // rank the gather then runs while the host reads the contact shares and the ranks exchange
-  // them (compute_forces: the gather, ~130 us a step of the cube block on an H100, had run
-  // before the contact stage, and the exchange after it with the device idle).
+  // The contact evaluation (x, v only) first, the element forces' gather after it, which adds
+  // each vertex's own contact sum (ContactStage::sums): on a GPU rank the gather then runs while
+  // the host reads the contact shares and the ranks exchange them (compute_forces: the gather,
+  // ~130 us a step of the cube block on an H100, had run before the contact stage, and the
+  // exchange after it with the device idle), and the merge of those that arrived beside it.
   void assemble_forces(double dt_diss, double alpha) override {
-    if (contact_) contact_->evaluate(x_.cview(), v_.cview(), dt_diss);
+    using Sums = typename ContactStage<Exec>::Sums;
+    const bool contact = contact_ != nullptr;
+    if (contact) contact_->evaluate(x_.cview(), v_.cview(), dt_diss);
+    const Sums cs = contact ? contact_->sums() : Sums{};
     const auto v = v_.cview();
     const auto tf = tf_.cview();
     const auto off = csr_off_.cview();
@@ -209,14 +213,15 @@ class QdemBackend final : public Backend {
             s -= (alpha * mass[i]) * vi;
             if (dt_diss > 0) diss_v[i] += dt_diss * alpha * mass[i] * norm2(vi);
           }
+          if (contact) {
+            if (cs.keep_base && cs.target[i]) cs.base.set(i, s);
+            s += cs.sum[i];
+          }
           f.set(i, s);
         });
   }
   std::span<const ContactShare> contact_shares() override {
     return contact_ ? contact_->shares() : std::span<const ContactShare>{};
-  }
-  void queue_contact_sums() override {
-    if (contact_) contact_->queue_sums(f_.view());
   }
   void add_contact_forces(std::span<const ContactShare> in) override {
     if (contact_) contact_->add_forces(f_.view(), in);

@@ -208,17 +208,16 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       local_->unpack_halo(reinterpret_cast<const double*>(in.data()), e.packed_space());
       halo_bytes_ += e.last_bytes();
     }
-    // The element forces' gather (queued after the contact evaluation) and each vertex's own
-    // contact entries run while the shares are read and exchanged (on a GPU): these scopes do
-    // not synchronise, that work counts at add_contact_forces.
+    // Each vertex's own contact entries and the element forces' gather (queued after the
+    // contact evaluation) run while the shares are read and exchanged (on a GPU): these scopes
+    // do not synchronise, that work counts at add_contact_forces, whose merge of the shares
+    // runs beside the gather.
     {
       auto s = tm.launch("elements");
       local_->element_forces(L_.n_interior, static_cast<std::int64_t>(L_.tets.size()), dt_diss,
                              false);
       local_->assemble_forces(dt_diss, alpha);
     }
-    // The shares leave before this rank's own contact sums are queued (a GPU rank's host
-    // launches them while the neighbours get to their sends), and arrive after.
     std::vector<std::byte> in;
     if (contact_) {
       std::span<const ContactShare> out;
@@ -231,11 +230,6 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
         auto s = tm.launch("halo");
         auto s1 = tm.launch("halo.shares");
         send_shares(out);
-      }
-      {
-        auto s = tm.launch("elements");
-        auto s1 = tm.launch("elements.shares");
-        local_->queue_contact_sums();
       }
       auto s = tm.launch("halo");
       auto s1 = tm.launch("halo.shares");
@@ -451,7 +445,6 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   void undo_dissipation() override { unsupported("undo_dissipation"); }
   void assemble_forces(double, double) override { unsupported("assemble_forces"); }
   std::span<const ContactShare> contact_shares() override { unsupported("contact_shares"); }
-  void queue_contact_sums() override { unsupported("queue_contact_sums"); }
   void add_contact_forces(std::span<const ContactShare>) override {
     unsupported("add_contact_forces");
   }
