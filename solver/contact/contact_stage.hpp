@@ -521,11 +521,17 @@ class ContactStage {
       auto scope = tm.scope("contact.narrow");
       nc = narrow_phase(x);
     }
+    // The per-vertex sums are queued behind the force law, and the host waits for the force law
+    // only (forced_), not for them: queued after the wait, their short kernels had left the
+    // device idle between the host's launches (one H200: the step 25-60 us longer); a wait for
+    // them too would hold an MPI rank's shares back (they leave once the force law is done).
     {
-      auto scope = tm.scope("contact.force");
+      auto scope = tm.launch("contact.force");
       forces(v, dt, nc);
+      if constexpr (S == Space::Cuda) forced_.record();
+      gather_local();
+      forced_.wait();
     }
-    gather_local();  // queued: its device time counts in the element gather's scope
     stats_.pairs = npairs;
     stats_.contacts = nc;
     ++steps_;
@@ -1257,7 +1263,7 @@ class ContactStage {
   void gather_local() {
     const std::int64_t ne = 4 * n_prev_;
     fit_count(vent_, ne);
-    sum_.resize(nfv_);
+    if (sum_.size() != nfv_) sum_.resize(nfv_);  // every entry is written below
     if (ghosts_) {
       if (base_.size() < nfv_) base_.resize(nfv_);
       fit_count(ekey_, ne);  // merge_shares fills it, on the side stream
@@ -1518,6 +1524,7 @@ class ContactStage {
   std::vector<std::int32_t> share_head_, share_next_, share_first_;
   std::vector<std::uint8_t> share_host_;  // share_flag_ on the host (merge_shares checks)
   DeviceMark shares_mark_;                // after the shares' compaction and copy (queue_shares)
+  DeviceMark forced_;                     // after the force law (evaluate)
   DeviceMark summed_, merged_;          // after gather_local; after merge_shares' side stream work
   Buffer<int> keep_{S};                 // flags and their scan (keep_evaluated, order_border_last)
   Buffer<int> tfirst_{S}, tsecond_{S};  // the narrow phase's pair order on a rank with ghosts
