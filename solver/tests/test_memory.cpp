@@ -224,6 +224,44 @@ TEST(Memory, SideQueueWorkFollowsTheForkPoint) {
   }
 }
 
+// DeviceMark::follow: the default stream's work queued after it waits, on the device, for the
+// side stream's work up to the mark: its copy of a buffer that the side stream writes after a
+// long copy (256 MiB, ~10 ms) reads the new contents, where a default stream that did not wait
+// would read the old ones at once. Before any record() it does nothing.
+TEST(Memory, FollowJoinsTheSideStreamsWork) {
+  if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
+  const std::size_t n = std::size_t{1} << 16, bytes = n * sizeof(double);
+  const std::size_t big = std::size_t{1} << 28;
+  Buffer<double> a(Space::Cuda);
+  Buffer<std::byte> slow(Space::Cuda, static_cast<std::int64_t>(big));
+  a.assign(std::vector<double>(n, -1.0));
+  StagingBytes fill, back, load;
+  fill.resize(bytes);
+  back.resize(bytes);
+  load.resize(big);
+  double* f = reinterpret_cast<double*>(fill.data());
+  for (std::size_t k = 0; k < n; ++k) f[k] = 3.5 + static_cast<double>(k % 5);
+  DeviceMark unused;
+  unused.follow();  // nothing recorded
+  DeviceMark written, read;
+  cuda_sync();
+  {
+    SideQueue side(true);
+    cuda_copy_queued(slow.view().p, load.data(), big);
+    cuda_copy_queued(a.view().p, fill.data(), bytes);
+    written.record();
+  }
+  written.follow();
+  cuda_copy_queued(back.data(), a.cview().p, bytes);
+  read.record();
+  read.wait();
+  const double* got = reinterpret_cast<const double*>(back.data());
+  std::size_t wrong = 0;
+  for (std::size_t k = 0; k < n; ++k) wrong += got[k] != 3.5 + static_cast<double>(k % 5);
+  EXPECT_EQ(wrong, 0u);
+  cuda_sync();
+}
+
 // Copies between the device and pageable host memory of 4 MiB and more go through two
 // page-locked 8 MiB chunks (memory_cuda.cu): sizes around the threshold and the chunk, and
 // several chunks with a partial last one, arrive whole both ways; a copy from page-locked
