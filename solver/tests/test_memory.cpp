@@ -182,6 +182,34 @@ TEST(Memory, CopyStreamCopiesAreDoneAfterTheWait) {
   EXPECT_EQ(b.to_host(), v);
 }
 
+// Two streams' order, seen by copies: a device buffer `a` of n doubles (-1 at first), a
+// 256 MiB copy (~10 ms) from `load` into `slow` to put ahead of a write, page-locked `fill`
+// (what the write puts in a) and `back` (what a later read of a got), and the count of
+// `back`'s values other than fill's.
+struct StreamOrder {
+  static constexpr std::size_t n = std::size_t{1} << 16, bytes = n * sizeof(double);
+  static constexpr std::size_t big = std::size_t{1} << 28;
+  Buffer<double> a{Space::Cuda};
+  Buffer<std::byte> slow{Space::Cuda, static_cast<std::int64_t>(big)};
+  StagingBytes fill, back, load;
+  StreamOrder() {
+    a.assign(std::vector<double>(n, -1.0));
+    fill.resize(bytes);
+    back.resize(bytes);
+    load.resize(big);
+  }
+  void set_fill(double value) {
+    double* f = reinterpret_cast<double*>(fill.data());
+    for (std::size_t k = 0; k < n; ++k) f[k] = value + static_cast<double>(k % 7);
+  }
+  std::size_t wrong(double value) const {
+    const double* got = reinterpret_cast<const double*>(back.data());
+    std::size_t w = 0;
+    for (std::size_t k = 0; k < n; ++k) w += got[k] != value + static_cast<double>(k % 7);
+    return w;
+  }
+};
+
 // A SideQueue's work starts after the default stream's work queued before it, or before the
 // DeviceMark it is given: its copy of a buffer that the default stream writes after a long copy
 // (256 MiB, ~10 ms, into another buffer) reads the new contents, where a side stream that did
@@ -189,37 +217,25 @@ TEST(Memory, CopyStreamCopiesAreDoneAfterTheWait) {
 // does not matter. DeviceMark::wait returns once the side's work is done. Not nested.
 TEST(Memory, SideQueueWorkFollowsTheForkPoint) {
   if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
-  const std::size_t n = std::size_t{1} << 16, bytes = n * sizeof(double);
-  const std::size_t big = std::size_t{1} << 28;
-  Buffer<double> a(Space::Cuda);
-  Buffer<std::byte> slow(Space::Cuda, static_cast<std::int64_t>(big));
-  a.assign(std::vector<double>(n, -1.0));
-  StagingBytes fill, back, load;
-  fill.resize(bytes);
-  back.resize(bytes);
-  load.resize(big);
+  StreamOrder t;
   for (const bool marked : {true, false}) {
     SCOPED_TRACE(marked ? "from a mark" : "from now");
     const double value = marked ? 2.5 : 4.0;
-    double* f = reinterpret_cast<double*>(fill.data());
-    for (std::size_t k = 0; k < n; ++k) f[k] = value + static_cast<double>(k % 7);
+    t.set_fill(value);
     cuda_sync();
-    cuda_copy_queued(slow.view().p, load.data(), big);
-    cuda_copy_queued(a.view().p, fill.data(), bytes);
+    cuda_copy_queued(t.slow.view().p, t.load.data(), t.big);
+    cuda_copy_queued(t.a.view().p, t.fill.data(), t.bytes);
     DeviceMark filled, read;
     filled.record();
-    if (marked) cuda_copy_queued(slow.view().p, load.data(), big);  // after the mark
+    if (marked) cuda_copy_queued(t.slow.view().p, t.load.data(), t.big);  // after the mark
     {
       SideQueue side(true, marked ? &filled : nullptr);
       EXPECT_THROW(SideQueue(true), std::logic_error);
-      cuda_copy_queued(back.data(), a.cview().p, bytes);
+      cuda_copy_queued(t.back.data(), t.a.cview().p, t.bytes);
       read.record();
     }
     read.wait();
-    const double* got = reinterpret_cast<const double*>(back.data());
-    std::size_t wrong = 0;
-    for (std::size_t k = 0; k < n; ++k) wrong += got[k] != value + static_cast<double>(k % 7);
-    EXPECT_EQ(wrong, 0u);
+    EXPECT_EQ(t.wrong(value), 0u);
     cuda_sync();
   }
 }
@@ -230,35 +246,23 @@ TEST(Memory, SideQueueWorkFollowsTheForkPoint) {
 // would read the old ones at once. Before any record() it does nothing.
 TEST(Memory, FollowJoinsTheSideStreamsWork) {
   if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
-  const std::size_t n = std::size_t{1} << 16, bytes = n * sizeof(double);
-  const std::size_t big = std::size_t{1} << 28;
-  Buffer<double> a(Space::Cuda);
-  Buffer<std::byte> slow(Space::Cuda, static_cast<std::int64_t>(big));
-  a.assign(std::vector<double>(n, -1.0));
-  StagingBytes fill, back, load;
-  fill.resize(bytes);
-  back.resize(bytes);
-  load.resize(big);
-  double* f = reinterpret_cast<double*>(fill.data());
-  for (std::size_t k = 0; k < n; ++k) f[k] = 3.5 + static_cast<double>(k % 5);
+  StreamOrder t;
+  t.set_fill(3.5);
   DeviceMark unused;
   unused.follow();  // nothing recorded
   DeviceMark written, read;
   cuda_sync();
   {
     SideQueue side(true);
-    cuda_copy_queued(slow.view().p, load.data(), big);
-    cuda_copy_queued(a.view().p, fill.data(), bytes);
+    cuda_copy_queued(t.slow.view().p, t.load.data(), t.big);
+    cuda_copy_queued(t.a.view().p, t.fill.data(), t.bytes);
     written.record();
   }
   written.follow();
-  cuda_copy_queued(back.data(), a.cview().p, bytes);
+  cuda_copy_queued(t.back.data(), t.a.cview().p, t.bytes);
   read.record();
   read.wait();
-  const double* got = reinterpret_cast<const double*>(back.data());
-  std::size_t wrong = 0;
-  for (std::size_t k = 0; k < n; ++k) wrong += got[k] != 3.5 + static_cast<double>(k % 5);
-  EXPECT_EQ(wrong, 0u);
+  EXPECT_EQ(t.wrong(3.5), 0u);
   cuda_sync();
 }
 
