@@ -35,7 +35,7 @@ SideQueue::~SideQueue() = default;
 DeviceMark::~DeviceMark() = default;
 void DeviceMark::record() { no_cuda(); }
 void DeviceMark::wait() {}
-void DeviceMark::follow() {}
+void DeviceMark::follow() const {}
 CudaIpcHandle cuda_ipc_handle(void*) { no_cuda(); }
 void* cuda_ipc_open(const CudaIpcHandle&) { no_cuda(); }
 void cuda_ipc_close(void*) noexcept {}

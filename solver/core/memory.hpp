@@ -60,7 +60,7 @@ class DeviceMark {
   DeviceMark& operator=(const DeviceMark&) = delete;
   void record();
   void wait();
-  void follow();
+  void follow() const;
 
  private:
   friend class SideQueue;

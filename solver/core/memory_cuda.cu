@@ -355,7 +355,7 @@ void DeviceMark::record() {
   pending_ = true;
 }
 
-void DeviceMark::follow() {
+void DeviceMark::follow() const {
   if (!pending_) return;
   QDEMSPH_CUDA_CHECK(cudaStreamWaitEvent(cuda_stream(), static_cast<cudaEvent_t>(event_), 0),
                      "cudaStreamWaitEvent (follow)");
