@@ -805,20 +805,17 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   // ranks evaluated for owned vertices, by source rank. Over the halo plan's neighbours: a
   // ghost's owner is one.
   void send_shares(std::span<const ContactShare> out) {
-    std::vector<std::int64_t> off(np_ + 1, 0);
-    for (const ContactShare& s : out) {
+    for (const ContactShare& s : out)
       if (s.rank < 0 || s.rank >= np_ || s.rank == me_)
         throw std::logic_error("contact share for vertex " + std::to_string(s.vertex) +
                                " of rank " + std::to_string(s.rank) + " on rank " +
                                std::to_string(me_));
-      ++off[s.rank + 1];
-    }
-    for (int r = 0; r < np_; ++r) off[r + 1] += off[r];
-    std::vector<std::int64_t> fill(off.begin(), off.end() - 1);
+    const Buckets by = bucket_indices(HostExec{}, static_cast<std::int64_t>(out.size()), np_,
+                                      [&](std::int64_t k) { return out[k].rank; });
     shares_out_.resize(out.size());
-    for (const ContactShare& s : out) shares_out_[fill[s.rank]++] = s;
+    for (std::size_t j = 0; j < out.size(); ++j) shares_out_[j] = out[by.index[j]];
     CommEngine& e = halo_->engine();
-    e.exchange_begin(std::as_bytes(std::span(shares_out_)), off, sizeof(ContactShare));
+    e.exchange_begin(std::as_bytes(std::span(shares_out_)), by.start, sizeof(ContactShare));
     halo_bytes_ += e.last_bytes();
   }
 
