@@ -101,6 +101,9 @@ class Network:
     note: str = ""
     round_trip: float = 0.0  # per host round trip of a GPU rank (Options.round_trips)
     stage_offnode_only: bool = False  # on a node halos stay in device memory (CUDA IPC)
+    # Host MPI latency per message on a node, for the collectives (allreduce, rebalancing):
+    # where halos move by device copies, intra_latency is the copy's, not the host's. None: the same.
+    host_latency: float | None = None
 
 
 # Defaults, stated (vendor figures, derated to what MPI typically achieves):
@@ -120,19 +123,22 @@ class Network:
 # three weak cases on 2 and 4 H200s at 05319f8, their in-run rebuilds taken out (`model.py
 # fit-round-trip --costs h200-05319f8`, k 0.25; references/benchmarks/scaling/
 # 2026-11-27_x4_pool_merge/call4_h200x4/N_*/records/*_n2.json, *_n4.json, medians): measured
-# minus predicted without it, cube block +0.061 / +0.042 ms at 2 / 4 GPUs (3 round trips),
-# dominoes +0.173 / +0.175 (3), dam break +0.313 / +0.458 (4) -> 65.2 us per round trip. One
-# constant fits badly: residuals -0.135 / -0.153, -0.023 / -0.021, +0.052 / +0.197 ms. Per
-# round trip the cube block asks 14-20 us, the dominoes 58 (their one-GPU step is 0.442 ms at
-# the set's cube-block tet and pair costs, 0.564 measured) and the dam break 78-114. Two of the
-# bodies' three round trips (the x, v halo and the skin test's allreduce) run while the device
-# computes the interior tets, and the contact shares' behind the element gather; the fluid's
-# four each follow a device synchronisation (skin test; the x, v and two rho, p, m refreshes).
-# The counts stand (the host still waits and runs MPI that often); the overlap shows as the
-# bodies' lower time per round trip, which one constant averages. Before: 62.5 us at d32fc91
-# (costs h100-d32fc91, k 0.6, two H100s, 2026-11-26_x2_skin_overlap/: cubes +0.063 ms, dominoes
-# +0.213, dam break +0.324), 67 us at 01b2aab (costs h100-ipc, k 1.4).
-IPC_ROUND_TRIP = 65.2e-6
+# minus predicted without it, cube block +0.068 / +0.057 ms at 2 / 4 GPUs (3 round trips),
+# dominoes +0.180 / +0.190 (3), dam break +0.320 / +0.472 (4) -> 68.4 us per round trip (65.2
+# before the allreduce took the host's latency, Network.host_latency). One constant fits badly:
+# residuals -0.137 / -0.148, -0.025 / -0.016, +0.046 / +0.199 ms. Per round trip the cube block
+# asks 19-23 us, the dominoes 60-63 (their one-GPU step is 0.442 ms at the set's cube-block tet
+# and pair costs, 0.564 measured) and the dam break 80-118. Two of the bodies' three round trips
+# (the x, v halo and the skin test's allreduce) run while the device computes the interior tets,
+# and the contact shares' behind the element gather; the fluid's four each follow a device
+# synchronisation (skin test; the x, v and two rho, p, m refreshes). The counts stand (the host
+# still waits and runs MPI that often); the overlap shows as the bodies' lower time per round
+# trip, which one constant averages. Since then the cube block's round trips hide entirely: at
+# e16c73f (4 x H100) and 1becfa5 (4 x H200) the fit over its own 2- and 4-GPU records gives
+# -10 and -6 us (scaling/README.md). Before: 62.5 us at d32fc91 (costs h100-d32fc91, k 0.6, two
+# H100s, 2026-11-26_x2_skin_overlap/: cubes +0.063 ms, dominoes +0.213, dam break +0.324), 67 us
+# at 01b2aab (costs h100-ipc, k 1.4).
+IPC_ROUND_TRIP = 68.4e-6
 
 #  * CUDA IPC peer copies between the two H100s of one host (NVLink, scaling/probes/devicecomm.cu,
 #    2026-11-25): 8 B 7.6 us (copy + stream synchronisation), 1 MB 10.7 us (98 GB/s), 16 MB 53 us
@@ -142,8 +148,10 @@ NETWORKS = {
     # What the code does today on GPUs: on a node, halo records stay in device memory and move
     # by CUDA IPC peer copies (CommEngine::use_device); between nodes they are staged through
     # host memory (D2H, MPI, H2D): the GPU machines' Open MPI is not CUDA-aware.
+    # Host MPI on a node: MPI_Allreduce of one double 1.19 us on 4 ranks, 0.54 on 2 (a 4 x H200
+    # host, 2026-11-27, 2026-11-27_merge_beside_gather/README.md): 0.6 us a stage.
     "ipc-ndr": Network("ipc-ndr", 8e-6, 100e9, 2e-6, 45e9, 8, 10e-6, 25e9, round_trip=IPC_ROUND_TRIP,
-                       stage_offnode_only=True,
+                       stage_offnode_only=True, host_latency=0.6e-6,
                        note="GPU halos in device memory on a node (CUDA IPC over NVLink, measured), staged "
                        "through host memory between nodes over InfiniBand NDR; 8 GPUs per node; host round "
                        "trips calibrated on two H100s"),
@@ -264,7 +272,8 @@ def step_time(geo: dict, costs: Costs, net: Network, opt: Options) -> dict:
     else:  # static partition, or an imbalance below the threshold (no rebalance triggered)
         compute, busy, xr, balanced = per[crit]["compute"], per[crit]["compute"] + per[crit]["exchange"], crit, False
     jit = opt.jitter * math.sqrt(2 * math.log(N)) if N > 1 else 0.0
-    lat_ar = net.intra_latency if N <= net.ranks_per_node else net.inter_latency
+    on_node = net.intra_latency if net.host_latency is None else net.host_latency
+    lat_ar = on_node if N <= net.ranks_per_node else net.inter_latency
     ar = opt.allreduces * math.ceil(math.log2(N)) * lat_ar if N > 1 else 0.0
     reb = 0.0
     if opt.rebalance_interval > 0 and N > 1:
@@ -411,7 +420,12 @@ def load_costs(name: str) -> Costs:
     if name not in doc["costs"]:
         raise KeyError(f"unknown costs '{name}' (known: {', '.join(doc['costs'])})")
     d = doc["costs"][name]
-    return Costs(**{k: d[k] for k in ("tet", "vertex", "pair", "particle", "step")}, label=name, source=d.get("source", ""))
+    items = ("tet", "vertex", "pair", "particle", "step")
+    missing = [k for k in items if k not in d]
+    if missing:  # e.g. calibrated from a scene without fluid: no particle cost
+        raise ValueError(f"costs '{name}' has no {', '.join(missing)} cost: calibrate it with records that "
+                         f"have those items too (e.g. a dam-break run for the particle cost)")
+    return Costs(**{k: d[k] for k in items}, label=name, source=d.get("source", ""))
 
 
 def main(argv=None):

@@ -123,6 +123,13 @@ def test_allreduce_is_log2_latency():
     assert p["allreduce_s"] == pytest.approx(2 * 4 * 2e-6)  # 16 ranks > 4 per node: inter latency
 
 
+def test_allreduce_on_a_node_takes_the_host_latency_where_halos_are_device_copies():
+    opt = replace(NOJIT, allreduces=2)
+    net = replace(NET, intra_bandwidth=math.inf, intra_latency=8e-6, inter_bandwidth=math.inf, host_latency=0.5e-6)
+    p = model.step_time(rows([4], nbrs=0)[0], COSTS, net, opt)
+    assert p["allreduce_s"] == pytest.approx(2 * 2 * 0.5e-6)  # 4 ranks on one node: log2 4 = 2 stages
+
+
 def test_extrapolated_rows_take_the_slowest_candidate():
     g = rows([1, 16, 32])
     g[1]["held_tets"] = [1000] * 15 + [1500]  # the worst piece of N=16 is worse than N=32's
@@ -150,6 +157,14 @@ def test_costs_from_record():
 def test_named_cost_sets_load():
     c = model.load_costs("h200")
     assert c.tet > 0 and c.particle > 0
+
+
+def test_a_cost_set_without_an_item_cost_is_refused_by_name(tmp_path, monkeypatch):
+    (tmp_path / "costs.json").write_text(json.dumps(
+        {"costs": {"bodies-only": {"tet": 1e-11, "vertex": 5e-11, "pair": 5e-10, "step": 0.0}}}))
+    monkeypatch.setattr(model, "HERE", tmp_path)
+    with pytest.raises(ValueError, match="'bodies-only' has no particle cost"):
+        model.load_costs("bodies-only")
 
 
 def test_contact_work_counts_owned_and_ghost_surface():
