@@ -50,7 +50,8 @@ Time per step of rank r (the step ends when the slowest rank ends):
        CPU ranks; IPC_ROUND_TRIP).
   s    per-rank jitter (relative standard deviation of a rank's step time): the expected
        maximum of N ranks grows as s sqrt(2 ln N) (Gaussian extreme value).
-  A(N) allreduce(s) per step (dt, energies): n_ar ceil(log2 N) a (a_inter beyond one node).
+  A(N) allreduce(s) per step (dt, energies): n_ar ceil(log2 N) a (on a node the host MPI
+       latency, Network.host_latency where halos are device copies; a_inter beyond one node).
   B    rebalancing and plan rebuilds amortised: (migrated bytes / B + N a) / interval.
 
 Inputs: the partition geometry (geometry.py: per-rank held tets, owned items, ghosts,
