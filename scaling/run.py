@@ -11,7 +11,8 @@ and write one JSON record per run.
 Launch (stated in every record under `launch`):
   mpirun   -np N, --map-by core --bind-to core with 1 thread per rank (OMP_NUM_THREADS=1,
            OMP_PROC_BIND=close, OMP_PLACES=cores); --map-by slot:PE=T --bind-to core with T
-           threads per rank (cuda: T = cores / GPUs); when N x T exceeds the cores:
+           threads per rank (cuda: T = min(cores / GPUs, 8), the solver's default for a GPU
+           rank: more idle threads spin, and a VM's host steals their cores); when N x T exceeds the cores:
            --oversubscribe --bind-to none (said so in the record). --allow-run-as-root when
            root. cuda: one rank per GPU, the stepper picks GPU (rank % GPUs on the node).
   srun     inside a Slurm allocation: srun -n N --cpus-per-task=T --cpu-bind=cores
@@ -46,6 +47,7 @@ import json
 import os
 import platform
 import re
+import resource
 import shlex
 import shutil
 import subprocess
@@ -57,6 +59,10 @@ HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 sys.path.insert(0, str(HERE))
 import scenes  # noqa: E402
+
+# A GPU rank's OpenMP threads unless --threads says (the solver's own default for a GPU rank,
+# kGpuRankThreads in solver/app/run_scene.cpp; scaling/README.md, "Host threads of a GPU rank").
+GPU_RANK_THREADS = 8
 
 SCHEMA = "qdemsph.scaling.run/2"
 PHASES = ("elements", "integration", "contact", "sph", "halo", "migration", "balance", "output")
@@ -186,7 +192,30 @@ def busy_imbalance(par: dict):
     return max(busy) / mean - 1 if mean > 0 else None
 
 
-def make_record(meta, launch, summary, facts, run_wall, status, note="") -> dict:
+def host_usage() -> dict:
+    """What the processes this one has waited for used, and the host's CPU steal time (a
+    VM's vCPUs waiting for the hypervisor; /proc/stat, Linux only): take one before and one
+    after a run, and usage_between() gives the run's share."""
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    u = {"user_s": ru.ru_utime, "sys_s": ru.ru_stime, "minor_faults": ru.ru_minflt, "major_faults": ru.ru_majflt,
+         "voluntary_switches": ru.ru_nvcsw, "involuntary_switches": ru.ru_nivcsw}
+    try:
+        cpu = Path("/proc/stat").read_text().split("\n", 1)[0].split()
+        u["steal_s"] = int(cpu[8]) / os.sysconf("SC_CLK_TCK")
+    except (OSError, IndexError, ValueError):
+        pass
+    return u
+
+
+def usage_between(before: dict, after: dict) -> dict:
+    """The run's usage (host_usage after minus before): CPU seconds of its processes in user
+    and kernel mode, their page faults (minor: a page first touched or mapped; each costs more
+    in a VM) and context switches, and the seconds the host's CPUs were stolen meanwhile (all
+    CPUs, not only the run's)."""
+    return {k: round(after[k] - before[k], 6) for k in after if k in before}
+
+
+def make_record(meta, launch, summary, facts, run_wall, status, note="", usage=None) -> dict:
     rec = {"schema": SCHEMA, "date": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
            "sweep": meta["sweep"], "case": meta["case"], "mode": meta["mode"], "variant": meta.get("variant"),
            "ranks": launch["ranks"], "gpus": launch["ranks"] if launch["backend"] == "cuda" else 0,
@@ -194,7 +223,8 @@ def make_record(meta, launch, summary, facts, run_wall, status, note="") -> dict
            "size": {k: meta[k] for k in ("n_tets", "n_vertices", "n_particles", "bodies", "layout")},
            "preset": meta["preset"], "preset_params": meta["preset_params"], "params": meta.get("params") or {},
            "status": status, "note": note,
-           "process_wall_s": run_wall, "loadavg_after": list(os.getloadavg()), "machine": facts}
+           "process_wall_s": run_wall, "host_usage": usage, "loadavg_after": list(os.getloadavg()),
+           "machine": facts}
     if summary:
         rec["summary"] = {k: summary.get(k) for k in ("wall_s", "steps", "sim_time", "dt", "n_tets", "n_vertices",
                                                        "backend", "threads", "status", "phases", "contact", "fluid")}
@@ -263,7 +293,7 @@ def run_sweep(a) -> list[dict]:
     qd = str(Path(a.qdemsph).resolve()) if os.sep in a.qdemsph else shutil.which(a.qdemsph) or a.qdemsph
     facts = machine_facts(qd)
     cores = facts["usable_cores"]
-    threads = a.threads or (max(1, cores // max(ranks)) if a.backend == "cuda" else 1)
+    threads = a.threads or (max(1, min(cores // max(ranks), GPU_RANK_THREADS)) if a.backend == "cuda" else 1)
     # dt: once, from the 1-rank scene (weak: the same local geometry at every N; strong: the
     # same scene), fixed for every run of the sweep.
     try:
@@ -310,7 +340,7 @@ def run_sweep(a) -> list[dict]:
             print(f"$ {launch['command']}", flush=True)
             best, tries = None, []
             for _ in range(max(1, a.repeat)):
-                t0 = time.time()
+                t0, u0 = time.time(), host_usage()
                 status, note, summary = "ok", "", None
                 shutil.rmtree(rd, ignore_errors=True)
                 limit = left if left is not None and left < a.timeout else a.timeout
@@ -324,7 +354,7 @@ def run_sweep(a) -> list[dict]:
                             status, note = "failed", f"exit {p.returncode}: {(p.stderr or p.stdout)[-2000:]}"
                 except subprocess.TimeoutExpired:
                     status, note = "timeout", f"killed after {limit:.0f} s (time limit of the run or what was left of the budget)"
-                last = time.time() - t0
+                last, usage = time.time() - t0, usage_between(u0, host_usage())
                 sj = rd / "summary.json"
                 if copies and status == "ok":
                     pass  # run_copies gave the slowest copy's summary
@@ -341,10 +371,10 @@ def run_sweep(a) -> list[dict]:
                     break
                 tries.append(step_seconds(summary)["step_s"])
                 if best is None or tries[-1] < best[0]:
-                    best = (tries[-1], summary, last)
+                    best = (tries[-1], summary, last, usage)
             if status == "ok" and best:
-                _, summary, last = best  # the fastest of the repeats (least disturbed by other load)
-            rec = make_record(meta, launch, summary, facts, last, status, note)
+                _, summary, last, usage = best  # the fastest of the repeats (least disturbed by other load)
+            rec = make_record(meta, launch, summary, facts, last, status, note, usage)
             if copies:
                 rec["ranks"], rec["copies_step_s"] = n, (summary or {}).get("copies_step_s")
             rec["dt"], rec["end_time"] = dt_fixed, end_time
@@ -382,7 +412,7 @@ def main(argv=None):
     ap.add_argument("sweep", choices=list(scenes.SWEEPS))
     ap.add_argument("--ranks", help="comma-separated rank counts (default: the sweep's)")
     ap.add_argument("--backend", default="cpu", choices=["cpu", "cuda"], help="backend and size preset")
-    ap.add_argument("--threads", type=int, default=0, help="OpenMP threads per rank (default: 1 for cpu, cores/ranks for cuda)")
+    ap.add_argument("--threads", type=int, default=0, help="OpenMP threads per rank (default: 1 for cpu, min(cores/ranks, 8) for cuda)")
     ap.add_argument("--variants", help="e.g. balanced,static (default: the sweep's)")
     ap.add_argument("--launcher", default="mpirun", choices=["mpirun", "srun", "none", "copies"])
     ap.add_argument("--mpirun-args", default="", help="extra launcher arguments (one string)")

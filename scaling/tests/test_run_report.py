@@ -24,6 +24,17 @@ def test_mpirun_binding_and_flags():
         run.launch_command("none", 2, 1, "cpu", cores=4, root=False, extra=[])
 
 
+def test_host_usage_counts_a_childs_page_faults_and_cpu_time():
+    import subprocess
+    u0 = run.host_usage()
+    # A child that touches 64 MB of fresh memory: at least that many 4 KiB pages faulted in.
+    subprocess.run([sys.executable, "-c", "b = b'x' * (64 << 20)"], check=True)
+    u = run.usage_between(u0, run.host_usage())
+    assert u["minor_faults"] >= (64 << 20) // 4096
+    assert u["user_s"] + u["sys_s"] > 0 and u["major_faults"] >= 0
+    assert u.get("steal_s", 0) >= 0
+
+
 def test_step_seconds_prefers_the_rank_mean_and_drops_output_and_subphases():
     # In-run migration and balance are part of the step; the first distribution (setup_s) is not.
     s = {"steps": 10, "phases": {"elements": 5.0, "output": 9.0},

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -32,6 +33,12 @@
 
 namespace qdemsph {
 namespace {
+
+// A GPU rank's host threads build its layouts and launch its kernels; between layouts they
+// idle, spinning in OpenMP's barrier. 32 of them a rank made a 4 x H200 VM steal its cores
+// (52-76 s of CPU over a 10 s run) and the dominoes' three in-run layouts took 3.5-4.3 s
+// against 0.53-0.56 s with 8 (scaling/README.md, "Host threads of a GPU rank").
+constexpr int kGpuRankThreads = 8;
 
 // A probe resolved to vertex indices and weights: value = sum w_i * (x_i - X_i [disp]).
 struct ResolvedProbe {
@@ -162,14 +169,21 @@ double fluid_step(const Model& model, const Scene& scene, double dt_solid, doubl
 
 int run_scene(const Scene& scene, const RunOptions& opt) {
   const auto wall0 = std::chrono::steady_clock::now();
-  if (scene.run.threads > 0) omp_set_num_threads(scene.run.threads);
-#ifdef QDEMSPH_HAVE_MPI
-  // Several ranks on a node share its cores: unless told otherwise, each takes its share.
-  else if (world().local_size > 1 && !std::getenv("OMP_NUM_THREADS"))
-    omp_set_num_threads(std::max(1, omp_get_num_procs() / world().local_size));
-#endif
-  const Model model = build_model(scene);
   const std::string backend_name = opt.backend.value_or(scene.run.backend);
+  if (scene.run.threads > 0)
+    omp_set_num_threads(scene.run.threads);
+  else if (!std::getenv("OMP_NUM_THREADS")) {
+    // Unless told otherwise: several ranks on a node share its cores, each takes its share,
+    // and a GPU rank takes at most kGpuRankThreads.
+    int local_ranks = 1;
+#ifdef QDEMSPH_HAVE_MPI
+    local_ranks = world().local_size;
+#endif
+    int n = std::max(1, omp_get_num_procs() / local_ranks);
+    if (backend_name == "cuda") n = std::min(n, kGpuRankThreads);
+    if (n != omp_get_max_threads()) omp_set_num_threads(n);
+  }
+  const Model model = build_model(scene);
   std::unique_ptr<Backend> be = make_backend(backend_name);
   // Under mpirun with several ranks, the backend is the distributed decorator around it
   // (docs/parallel.md); rank 0 writes every file.
