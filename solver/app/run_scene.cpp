@@ -297,7 +297,7 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   summary["scene"] = scene.file.string();
   summary["name"] = scene.name;
   summary["backend"] = be->name();
-  summary["threads"] = backend_name == "cpu" ? omp_get_max_threads() : 0;
+  summary["threads"] = omp_get_max_threads();  // on a GPU: the host's (layouts, launches)
   summary["mode"] = scene.run.mode == RunMode::Static ? "static" : "dynamic";
   summary["n_bodies"] = model.bodies.size();
   summary["bodies"] = Json::array();  // index -> name, as fields.h5's /mesh/body numbers them
