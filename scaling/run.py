@@ -61,7 +61,7 @@ sys.path.insert(0, str(HERE))
 import scenes  # noqa: E402
 
 # A GPU rank's OpenMP threads unless --threads says (the solver's own default for a GPU rank,
-# kGpuRankThreads in solver/app/run_scene.cpp; scaling/README.md, "Host threads of a GPU rank").
+# kGpuRankThreads in solver/core/exec_host.hpp; scaling/README.md, "Host threads of a GPU rank").
 GPU_RANK_THREADS = 8
 
 SCHEMA = "qdemsph.scaling.run/2"

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <omp.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -11,6 +12,7 @@
 #include <optional>
 
 #include "core/error.hpp"
+#include "core/exec_host.hpp"
 #include "core/gpu_info.hpp"
 #include "core/progress.hpp"
 #include "integrate/backend.hpp"
@@ -33,12 +35,6 @@
 
 namespace qdemsph {
 namespace {
-
-// A GPU rank's host threads build its layouts and launch its kernels; between layouts they
-// idle, spinning in OpenMP's barrier. 32 of them a rank made a 4 x H200 VM steal its cores
-// (52-76 s of CPU over a 10 s run) and the dominoes' three in-run layouts took 3.5-4.3 s
-// against 0.53-0.56 s with 8 (scaling/README.md, "Host threads of a GPU rank").
-constexpr int kGpuRankThreads = 8;
 
 // A probe resolved to vertex indices and weights: value = sum w_i * (x_i - X_i [disp]).
 struct ResolvedProbe {
@@ -173,14 +169,13 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
   if (scene.run.threads > 0)
     omp_set_num_threads(scene.run.threads);
   else if (!std::getenv("OMP_NUM_THREADS")) {
-    // Unless told otherwise: several ranks on a node share its cores, each takes its share,
-    // and a GPU rank takes at most kGpuRankThreads.
     int local_ranks = 1;
 #ifdef QDEMSPH_HAVE_MPI
     local_ranks = world().local_size;
 #endif
-    int n = std::max(1, omp_get_num_procs() / local_ranks);
-    if (backend_name == "cuda") n = std::min(n, kGpuRankThreads);
+    const int n =
+        default_host_threads(omp_get_num_procs(), static_cast<int>(sysconf(_SC_NPROCESSORS_ONLN)),
+                             local_ranks, backend_name == "cuda");
     if (n != omp_get_max_threads()) omp_set_num_threads(n);
   }
   const Model model = build_model(scene);

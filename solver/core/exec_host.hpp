@@ -2,6 +2,7 @@
 // The CUDA twin is exec_cuda.cuh; stage code is written once against either.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -14,6 +15,21 @@ namespace qdemsph {
 struct HostExec {
   static constexpr Space space = Space::Host;
 };
+
+// A GPU rank's host threads build its layouts and launch its kernels; between layouts they
+// idle, spinning in OpenMP's barrier. 32 of them a rank made a 4 x H200 VM steal its cores
+// (52-76 s of CPU over a 10 s run) and the dominoes' three in-run layouts took 3.5-4.3 s
+// against 0.53-0.56 s with 8 (scaling/README.md, "Host threads of a GPU rank").
+inline constexpr int kGpuRankThreads = 8;
+
+// A rank's OpenMP threads when neither the scene nor OMP_NUM_THREADS says: its share of the
+// node's cores among the node's ranks, no more than the cores it is bound to, and on a GPU
+// at most kGpuRankThreads.
+inline int default_host_threads(int bound_cores, int node_cores, int ranks_on_node, bool gpu) {
+  int n = std::min(bound_cores, node_cores / std::max(1, ranks_on_node));
+  if (gpu) n = std::min(n, kGpuRankThreads);
+  return std::max(1, n);
+}
 
 // Loops shorter than this run on one thread: a parallel region costs microseconds, more
 // than a small loop's work, and far more when the cores are shared.

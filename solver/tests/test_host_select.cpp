@@ -1,7 +1,8 @@
 // Host orchestration primitives of a distributed rank's layout rebuild: stream compaction and
 // bucketing by key (core/select_host.hpp), the sorting permutation (core/radix_sort.hpp), the
 // prefix sum of counts and the atomic maximum (neighbor/scan.hpp) and the several maxima of one
-// pass (core/exec_host.hpp) give the serial answers, the same for any number of threads.
+// pass (core/exec_host.hpp) give the serial answers, the same for any number of threads; and
+// the default thread count of a rank.
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -12,6 +13,7 @@
 #include <numeric>
 #include <vector>
 
+#include "core/exec_host.hpp"
 #include "core/radix_sort.hpp"
 #include "core/select_host.hpp"
 #include "neighbor/scan.hpp"
@@ -136,6 +138,16 @@ TEST(HostSelect, AtomicMaxPositiveForAnyThreadCount) {
   atomic_max_positive(&acc, std::nan(""));
   atomic_max_positive(&acc, 1.0);
   EXPECT_EQ(acc, 2.5);
+}
+
+TEST(HostThreads, ARankTakesItsShareOfTheNodeBoundedByItsCoresAndAGpuRankAtMostEight) {
+  EXPECT_EQ(default_host_threads(64, 64, 1, false), 64);  // one CPU rank: every core
+  EXPECT_EQ(default_host_threads(64, 64, 4, false), 16);  // unbound: its share
+  EXPECT_EQ(default_host_threads(8, 64, 4, false), 8);    // bound to 8 cores
+  EXPECT_EQ(default_host_threads(1, 64, 2, true), 1);     // mpirun's default: one core a rank
+  EXPECT_EQ(default_host_threads(64, 64, 2, true), kGpuRankThreads);
+  EXPECT_EQ(default_host_threads(4, 4, 2, true), 2);
+  EXPECT_EQ(default_host_threads(2, 2, 4, false), 1);  // more ranks than cores
 }
 
 }  // namespace
