@@ -18,8 +18,9 @@ struct HostExec {
 
 // A GPU rank's host threads build its layouts and launch its kernels; between layouts they
 // idle, spinning in OpenMP's barrier. 32 of them a rank made a 4 x H200 VM steal its cores
-// (52-76 s of CPU over a 10 s run) and the dominoes' three in-run layouts took 3.5-4.3 s
-// against 0.53-0.56 s with 8 (scaling/README.md, "Host threads of a GPU rank").
+// (52-76 s of CPU over a 10 s run), and the dominoes' four layouts (the set-up's and three
+// in the run) took 3.5-4.3 s, against 0.53-0.56 s with 8 (scaling/README.md, "Host threads
+// of a GPU rank").
 inline constexpr int kGpuRankThreads = 8;
 
 // A rank's OpenMP threads when neither the scene nor OMP_NUM_THREADS says: its share of the
