@@ -173,10 +173,9 @@ int run_scene(const Scene& scene, const RunOptions& opt) {
 #ifdef QDEMSPH_HAVE_MPI
     local_ranks = world().local_size;
 #endif
-    const int n =
-        default_host_threads(omp_get_num_procs(), static_cast<int>(sysconf(_SC_NPROCESSORS_ONLN)),
-                             local_ranks, backend_name == "cuda");
-    if (n != omp_get_max_threads()) omp_set_num_threads(n);
+    omp_set_num_threads(default_host_threads(omp_get_num_procs(),
+                                             static_cast<int>(sysconf(_SC_NPROCESSORS_ONLN)),
+                                             local_ranks, backend_name == "cuda"));
   }
   const Model model = build_model(scene);
   std::unique_ptr<Backend> be = make_backend(backend_name);

@@ -316,6 +316,13 @@ QDEMSPH_HD bool share_less(const ContactShare& a, const ContactShare& b) {
   return a.slot < b.slot;
 }
 
+// Whether shares[lo] is its vertex's first in shares grouped by vertex: the one thread of
+// merge_shares' kernels that handles the vertex.
+template <class Shares>
+QDEMSPH_HD bool first_of_vertex(const Shares& shares, std::int64_t lo) {
+  return lo == 0 || shares[lo - 1].vertex != shares[lo].vertex;
+}
+
 // A share target's entries are merged with its shares kMergeChunk at a time: their keys are
 // read together (registers), so that the loads, a chain through vent_ to ekey_ an entry, are
 // in flight at once.
@@ -1421,8 +1428,8 @@ class ContactStage {
       const auto ekc = ekey_.cview();
       for_each(
           Exec{}, nin, QDEMSPH_LAMBDA(std::int64_t lo) {
+            if (!first_of_vertex(shares, lo)) return;
             const int i = shares[lo].vertex;
-            if (lo > 0 && shares[lo - 1].vertex == i) return;  // the thread of its first share
             std::int64_t c = lo;
             Vec3 s{};
             const int e = vcnt[i + 1];
@@ -1451,8 +1458,10 @@ class ContactStage {
     const auto msc = msum_.cview();
     for_each(
         Exec{}, nin, QDEMSPH_LAMBDA(std::int64_t lo) {
-          const int i = shares[lo].vertex;
-          if (lo == 0 || shares[lo - 1].vertex != i) f.set(i, base[i] + msc[lo]);
+          if (first_of_vertex(shares, lo)) {
+            const int i = shares[lo].vertex;
+            f.set(i, base[i] + msc[lo]);
+          }
         });
   }
 
