@@ -32,8 +32,8 @@ inline constexpr double kFluidWallCost = 0.25;
 
 // The ghost band's skin as a fraction of the kernel support: a wider band holds more ghosts
 // (band volume ~ (support + skin)^3 around a piece), a narrower one is rebuilt more often.
-// The first layout's; a run whose rebuilds cost more than 10 % of its stepping doubles it at
-// each rebuild, up to kMaxMarginGrowth x (parallel.fluid_skin in summary.json).
+// The first layout's; a run whose rebuilds cost more than 10 % of its stepping widens it at a
+// rebuild (widened_margin), up to kMaxMarginGrowth x (parallel.fluid_skin in summary.json).
 // A quarter support (h / 2, ~25 % more band width) lasts at least ~11 steps: at the CFL limit
 // (dt = 0.25 h / (c + v), c >= 10 v) a particle moves < 0.023 h per step, skin / 2 = h / 4;
 // the 3,280-particle test dam break (test_distributed_fluid.cpp) rebuilds after 37-133 steps.

@@ -10,12 +10,17 @@
 
 namespace qdemsph {
 
-// The margin (the bodies' contact slack, the fluid's ghost skin) for the next layout: twice the
-// current one, up to `most`, when the last rebuild took more than a tenth of the stepping time
-// since the one before (`stepping_s`); a wider band holds more ghosts and is rebuilt rarer.
+// The margin (the bodies' contact slack, the fluid's ghost skin) for the next layout. When the
+// last rebuild took more than a tenth of the stepping since the one before (`stepping_s`), the
+// margin grows by the factor that would bring it to a tenth if the motion kept its speed (the
+// stepping between rebuilds grows with the margin), at least twice, up to `most`; a wider band
+// holds more ghosts and is rebuilt rarer. One step to the factor, not doubling rebuild after
+// rebuild: on a GPU rank a rebuild costs ~100 steps, so each doubling cost as much again.
 inline double widened_margin(double margin, double most, double rebuild_s, double stepping_s) {
   constexpr double kRebuildShare = 0.1;
-  return rebuild_s > kRebuildShare * stepping_s ? std::min(2 * margin, most) : margin;
+  if (!(rebuild_s > kRebuildShare * stepping_s)) return margin;
+  const double factor = std::max(2.0, rebuild_s / (kRebuildShare * stepping_s));  // inf at 0
+  return std::min(factor * margin, most);
 }
 // Margins widen at most this factor over their first value. On a GPU rank a host-side rebuild
 // costs tens of steps: at 4 x a flowing dam break still rebuilt its fluid layout every ~30
