@@ -580,6 +580,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     r.imbalance = last_imbalance_;
     r.imbalance_initial = imbalance_initial_;
     r.rebalance_log = log_;
+    r.rebuild_log = rebuild_log_;
     const auto& t = timers_.seconds();
     const auto sec = seconds_of;
     const double contact = local_contact_seconds();
@@ -974,6 +975,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     if (rebuild && !rebalance) adapt_slack();
     const double t0 = MPI_Wtime();
     const std::int64_t before = migrated_bytes_;
+    const std::map<std::string, double> parts0 = timers_.seconds();
     StateSlice s;
     {
       auto scope = timers_.scope("migration");
@@ -986,6 +988,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     redistribute(s, rebalance, rebuild);
     rebuilt_at_ = MPI_Wtime();
     rebuild_s_ = rebuilt_at_ - t0;
+    RebuildEntry& e =
+        rebuild_log_.emplace_back(RebuildEntry{steps_, rebalance, slack_, rebuild_s_, {}});
+    for (const auto& [k, v] : timers_.seconds())
+      if (k == "balance" || k.starts_with("migration."))
+        e.parts[k] = v - seconds_of(parts0, k.c_str());
     if (rebalance) {
       ++rebalances_;
       log_.push_back({steps_, last_imbalance_, predicted_after_, migrated_bytes_ - before});
@@ -1010,7 +1017,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   void adapt_slack() {
     double t[2] = {rebuild_s_, MPI_Wtime() - rebuilt_at_};
     MPI_Allreduce(MPI_IN_PLACE, t, 2, MPI_DOUBLE, MPI_MAX, comm_);
-    const double slack = widened_margin(slack_, kMaxMarginGrowth * slack0_, t[0], t[1]);
+    const double most = kMaxMarginGrowth * slack0_;
+    const double slack = widened_margin(slack_, most, t[0], t[1], kMaxMarginGrowth);
     if (slack != slack_) set_slack(slack);
   }
 
@@ -1577,6 +1585,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   double last_imbalance_ = 0, imbalance_initial_ = 0, predicted_after_ = 0;
   bool pending_after_ = false;
   std::vector<RebalanceEntry> log_;
+  std::vector<RebuildEntry> rebuild_log_;
   std::int64_t migrated_bytes_ = 0, halo_bytes_ = 0, exchanges_ = 0;
   std::vector<ContactShare> shares_out_;  // send_shares' records, by destination, in flight
   // Fluid coupling: whole-model arrays by global vertex id (solid_views()), in the local

@@ -470,7 +470,8 @@ class MpiFluidExchange final : public FluidExchange {
     double t[2] = {rebuild_s_, since_s_};
     MPI_Allreduce(MPI_IN_PLACE, t, 2, MPI_DOUBLE, MPI_MAX, comm_);
     since_s_ = 0;
-    const double skin = widened_margin(skin_, kMaxMarginGrowth * kFluidSkin * support_, t[0], t[1]);
+    const double skin =
+        widened_margin(skin_, kMaxMarginGrowth * kFluidSkin * support_, t[0], t[1], kFluidSkinStep);
     if (skin != skin_) {
       skin_ = skin;
       band_ = BandGrid((support_ + skin_) / 2, z0_, period_);

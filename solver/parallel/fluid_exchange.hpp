@@ -38,6 +38,11 @@ inline constexpr double kFluidWallCost = 0.25;
 // (dt = 0.25 h / (c + v), c >= 10 v) a particle moves < 0.023 h per step, skin / 2 = h / 4;
 // the 3,280-particle test dam break (test_distributed_fluid.cpp) rebuilds after 37-133 steps.
 inline constexpr double kFluidSkin = 0.25;
+// The most the skin widens at a rebuild (widened_margin): a ghost carries the SPH passes, so a
+// wider band costs every step. Unbounded, the dam break (scaling/, 4 x H100) widened its skin
+// at once to 0.0105-0.0111 m instead of 0.0065 (2 x): the same one layout in the run, 20-25 %
+// more ghost traffic, and a step of 5.10-5.17 ms instead of 4.98-5.01.
+inline constexpr double kFluidSkinStep = 2;
 
 // For the stage of `fluid`, whose arrays live in `space`: the ghost band is its kernel
 // support 2h x (1 + kFluidSkin) wide, and wraps its periodic z (fluid.periodic_z).

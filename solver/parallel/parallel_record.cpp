@@ -52,6 +52,18 @@ Json ParallelRecord::to_json() const {
     log.push_back(r);
   }
   j["rebalance_log"] = log;
+  Json rebuilt = Json::array();
+  for (const RebuildEntry& e : rebuild_log) {
+    Json r = Json::object(), parts = Json::object();
+    r["step"] = e.step;
+    r["rebalance"] = e.rebalance;
+    r["slack"] = e.slack;
+    r["seconds"] = e.seconds;
+    for (const auto& [k, v] : e.parts) parts[k] = v;
+    r["parts"] = parts;
+    rebuilt.push_back(r);
+  }
+  j["rebuild_log"] = rebuilt;
   Json by_rank = Json::array();
   for (const auto& m : phases_by_rank) {
     Json r = Json::object();

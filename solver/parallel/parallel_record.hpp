@@ -31,6 +31,10 @@
 //                        first layout
 //   rebalance_log        [{step, imbalance_before, imbalance_after, bytes}]; imbalance_after
 //                        is measured over the next window (or the rest of the run)
+//   rebuild_log          the bodies' layout rebuilds and rebalances during the run:
+//                        [{step, rebalance, slack, seconds, parts}]: the slack it was built
+//                        with [m], this rank's (rank 0's in summary.json) wall seconds of it
+//                        and of its parts (balance and the migration.* sub-phases)
 //   phases_by_rank       per rank, its seconds of kParallelPhases (as in phases_*) and of the
 //                        sub-phases it timed (kBodySubPhases, kFluidSubPhases, as in summary.json's
 //                        phases: the first distribution's included; zeros left out): a part that
@@ -85,6 +89,14 @@ struct RebalanceEntry {
   std::int64_t bytes = 0;
 };
 
+// A bodies' layout installed during the run (ParallelRecord::rebuild_log).
+struct RebuildEntry {
+  std::int64_t step = 0;
+  bool rebalance = false;
+  double slack = 0, seconds = 0;
+  std::map<std::string, double> parts;
+};
+
 struct ParallelRecord {
   int ranks = 1;
   std::string curve = "hilbert";
@@ -101,6 +113,7 @@ struct ParallelRecord {
   std::vector<std::int64_t> owned_vertices, owned_tets;
   std::map<std::string, double> phases_max, phases_mean;
   std::vector<RebalanceEntry> rebalance_log;
+  std::vector<RebuildEntry> rebuild_log;
   std::vector<std::map<std::string, double>> phases_by_rank;
 
   // The distributed fluid's fields from its exchange's traffic.

@@ -13,13 +13,16 @@ namespace qdemsph {
 // The margin (the bodies' contact slack, the fluid's ghost skin) for the next layout. When the
 // last rebuild took more than a tenth of the stepping since the one before (`stepping_s`), the
 // margin grows by the factor that would bring it to a tenth if the motion kept its speed (the
-// stepping between rebuilds grows with the margin), at least twice, up to `most`; a wider band
-// holds more ghosts and is rebuilt rarer. One step to the factor, not doubling rebuild after
-// rebuild: on a GPU rank a rebuild costs ~100 steps, so each doubling cost as much again.
-inline double widened_margin(double margin, double most, double rebuild_s, double stepping_s) {
+// stepping between rebuilds grows with the margin): at least 2, at most `step` a rebuild, and
+// up to `most` in all. A wider band holds more ghosts and is rebuilt rarer; where ghosts are
+// cheap (the bodies' contact vertices) one step to the factor saves the rebuilds that doubling
+// rebuild after rebuild costs (~100 steps each on a GPU rank), where they carry work (the
+// fluid's SPH passes) `step` 2 keeps the band from outgrowing what the run needs.
+inline double widened_margin(double margin, double most, double rebuild_s, double stepping_s,
+                             double step) {
   constexpr double kRebuildShare = 0.1;
   if (!(rebuild_s > kRebuildShare * stepping_s)) return margin;
-  const double factor = std::max(2.0, rebuild_s / (kRebuildShare * stepping_s));  // inf at 0
+  const double factor = std::clamp(rebuild_s / (kRebuildShare * stepping_s), 2.0, step);
   return std::min(factor * margin, most);
 }
 // Margins widen at most this factor over their first value. On a GPU rank a host-side rebuild

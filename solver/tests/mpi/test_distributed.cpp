@@ -235,6 +235,26 @@ TEST(Distributed, ContactRecordsEvaluatedOnce) {
         size_of(), static_cast<long>(250 - bad), static_cast<long>(touching), pairs / pairs_ref);
   EXPECT_EQ(bad, 0);
   EXPECT_GT(touching, 100);
+  // The record's rebuild log: every rebalance among its entries, in step order, each with its
+  // slack and its parts' seconds within its own.
+  const ParallelRecord rec = dist->record({});
+  std::int64_t recuts = 0, last = 0;
+  for (const RebuildEntry& e : rec.rebuild_log) {
+    recuts += e.rebalance;
+    EXPECT_GT(e.step, last);
+    EXPECT_LE(e.step, 250);
+    last = e.step;
+    EXPECT_EQ(e.slack, rec.contact_slack);  // this short run never widens it
+    double parts = 0;
+    for (const char* k : {"balance", "migration.export", "migration.state", "migration.layout",
+                          "migration.upload"}) {
+      const auto it = e.parts.find(k);
+      if (it != e.parts.end()) parts += it->second;
+      EXPECT_GE(it == e.parts.end() ? 0.0 : it->second, 0.0) << k;
+    }
+    EXPECT_LE(parts, e.seconds * (1 + 1e-9)) << "step " << e.step;
+  }
+  EXPECT_EQ(recuts, dist->rebalances());
   if (size_of() > 1) {
     EXPECT_GT(dist->rebalances(), 0);
   }

@@ -132,18 +132,17 @@ TEST(DistributedFluid, RecutPaysOnlyWhenTheSavingExceedsTheRebuild) {
   EXPECT_TRUE(recut_pays(excess, 4.2e-3, 1000, 0.3));
 }
 
-// A margin grows, up to its bound, when the last rebuild took more than a tenth of the
-// stepping since the one before, by the factor that brings the rebuild to a tenth at the same
-// speed, at least 2: 0.5 s against 200 steps of 4 ms (0.8 s) asks for x6.25; against 1,000
-// steps (4 s) for x1.25, so x2; against 1,500 steps (6 s) nothing. A first rebuild with no
-// stepping measured widens to the bound.
+// A margin grows when the last rebuild took more than a tenth of the stepping since the one
+// before, by the factor that brings the rebuild to a tenth at the same speed, at least 2, at
+// most `step` a rebuild and `most` in all: 0.5 s against 200 steps of 4 ms (0.8 s) asks for
+// x6.25; against 1,000 steps (4 s) for x1.25, so x2; against 1,500 steps (6 s) nothing.
 TEST(DistributedFluid, MarginsWidenWhenRebuildsAreDear) {
-  EXPECT_DOUBLE_EQ(widened_margin(1.0, 16.0, 0.5, 0.8), 6.25);
-  EXPECT_DOUBLE_EQ(widened_margin(1.0, 16.0, 0.5, 4.0), 2.0);
-  EXPECT_DOUBLE_EQ(widened_margin(1.0, 16.0, 0.5, 6.0), 1.0);
-  EXPECT_DOUBLE_EQ(widened_margin(3.0, 4.0, 0.5, 0.8), 4.0);
-  EXPECT_DOUBLE_EQ(widened_margin(4.0, 4.0, 0.5, 0.8), 4.0);
-  EXPECT_DOUBLE_EQ(widened_margin(1.0, 16.0, 0.5, 0.0), 16.0);
+  EXPECT_DOUBLE_EQ(widened_margin(1.0, 16.0, 0.5, 0.8, 16.0), 6.25);
+  EXPECT_DOUBLE_EQ(widened_margin(1.0, 16.0, 0.5, 0.8, 2.0), 2.0);
+  EXPECT_DOUBLE_EQ(widened_margin(1.0, 16.0, 0.5, 4.0, 16.0), 2.0);
+  EXPECT_DOUBLE_EQ(widened_margin(1.0, 16.0, 0.5, 6.0, 16.0), 1.0);
+  EXPECT_DOUBLE_EQ(widened_margin(3.0, 4.0, 0.5, 0.8, 16.0), 4.0);
+  EXPECT_DOUBLE_EQ(widened_margin(4.0, 4.0, 0.5, 0.8, 16.0), 4.0);
 }
 
 TEST(DistributedFluid, DamBreakEqualsOneRankBitForBit) {

@@ -18,7 +18,7 @@ PARALLEL_KEYS = {"ranks", "curve", "rebalances", "rebuilds", "contact_slack", "i
                  "halo_bytes_per_step", "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "fluid_rebuilds", "fluid_recuts", "fluid_skin",
                  "setup_s",
                  "owned_vertices",
-                 "owned_tets", "phases_max", "phases_mean", "rebalance_log", "phases_by_rank"}
+                 "owned_tets", "phases_max", "phases_mean", "rebalance_log", "rebuild_log", "phases_by_rank"}
 PHASES = {"elements", "integration", "contact", "sph", "halo", "migration", "balance", "output"}
 # Rebalance (and migrate) at every measurement so that the run crosses many decompositions.
 REBALANCE = ["parallel.rebalance_every=25", "parallel.rebalance_threshold=0"]
