@@ -119,6 +119,24 @@ def efficiencies(rs, mode):
     return rows
 
 
+def node_factors(rows, rs, copies):
+    """Node factor and the decomposition's own efficiency (rows' "node", "decomp") from N
+    independent copies of the 1-rank run on the same machine (run.py --launcher copies, their
+    step "copies_s"): t(1) / t(N copies) and t(N copies) / t(N ranks), where the copies, the 1-rank run and the
+    N-rank run are of one revision (a baseline of other code divides unlike step times)."""
+    def rev(r):
+        return (r.get("machine") or {}).get("revision")
+
+    cop = {r["ranks"]: r for r in copies}
+    one = next((r for r in rs if r["ranks"] == 1), None)
+    for row, r in zip(rows, rs):
+        c = cop.get(row["ranks"])
+        if c and one and rev(c) == rev(one) == rev(r):
+            row["copies_s"] = c["step_s"]
+            row["node"] = one["step_s"] / c["step_s"]
+            row["decomp"] = c["step_s"] / row["step_s"]
+
+
 def model_line(rs, sweep, backend, ranks):
     """Model prediction for a measured weak series: costs from its 1-rank record, geometry
     from geometry_<sweep>_<backend>.json; None when either is missing."""
@@ -159,14 +177,8 @@ def plots(recs):
             continue
         mode = rs[0]["mode"]
         rows = efficiencies(rs, mode)
-        # Node factor and the decomposition's own efficiency from N independent copies of the
-        # 1-rank run on the same machine (run.py --launcher copies).
-        cop = {r["ranks"]: r["step_s"] for r in ser.get((sweep, backend, "copies", mach, params), [])}
-        t1 = next((r["step_s"] for r in rs if r["ranks"] == 1), None)
-        for row in rows:
-            if row["ranks"] in cop and t1:
-                row["node"] = t1 / cop[row["ranks"]]
-                row["decomp"] = cop[row["ranks"]] / row["step_s"]
+        node_factors(rows, rs, ser.get((sweep, backend, "copies", mach, params), []))
+        cop = [row for row in rows if "node" in row]
         ranks = [r["ranks"] for r in rs]
         tag = f"{sweep}_{backend}" + (f"_{variant}" if variant else "") + "".join(f"_{q}" for q in params.split())
         label = f"{backend}{', ' + variant if variant else ''}{', ' + params if params else ''}"
@@ -218,7 +230,7 @@ def plots(recs):
                        "^-", label="decomposition only (vs N independent copies)")
             ax[1].plot([r["ranks"] for r in rows if "node" in r], [r["node"] for r in rows if "node" in r], "v:",
                        color="0.4", label="node: N independent copies vs 1")
-            ax[0].plot(sorted(cop), [cop[n] * 1e3 for n in sorted(cop)], "v:", color="0.4",
+            ax[0].plot([r["ranks"] for r in cop], [r["copies_s"] * 1e3 for r in cop], "v:", color="0.4",
                        label="N independent copies of the 1-rank run")
         if pred:
             ax[0].plot([p["ranks"] for p in pred[0]], [p["step_s"] * 1e3 for p in pred[0]], "--", color="0.5",

@@ -118,6 +118,18 @@ def test_a_series_row_is_the_median_run_of_the_newest_revision():
     assert [r["step_s"] for r in rows] == [0.6]
 
 
+def test_node_factor_only_from_copies_of_the_same_revision():
+    def run_of(n, step, rev):
+        return {**rec(n, step), "machine": {"revision": rev}}
+
+    rs = [run_of(1, 1.0, "b"), run_of(2, 1.5, "b"), run_of(4, 2.0, "b")]
+    rows = report.efficiencies(rs, "weak")
+    report.node_factors(rows, rs, [run_of(2, 1.25, "b"), run_of(4, 3.0, "a")])
+    assert rows[1]["node"] == pytest.approx(0.8) and rows[1]["decomp"] == pytest.approx(1.25 / 1.5)
+    assert "node" not in rows[2]  # copies of revision a: not this code's baseline
+    assert "node" not in rows[0]  # no copies at one rank
+
+
 def test_preset_values_can_be_overridden_and_keep_their_own_series():
     import scenes
 
