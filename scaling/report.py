@@ -121,9 +121,10 @@ def efficiencies(rs, mode):
 
 def node_factors(rows, rs, copies):
     """Node factor and the decomposition's own efficiency (rows' "node", "decomp") from N
-    independent copies of the 1-rank run on the same machine (run.py --launcher copies, their
-    step "copies_s"): t(1) / t(N copies) and t(N copies) / t(N ranks), where the copies, the 1-rank run and the
-    N-rank run are of one revision (a baseline of other code divides unlike step times)."""
+    independent copies of the 1-rank run on the same machine (run.py --launcher copies; their
+    step: "copies_s"): t(1) / t(N copies) and t(N copies) / t(N ranks), where the copies, the
+    1-rank run and the N-rank run are of one revision (another revision's baseline would
+    divide unlike step times)."""
     def rev(r):
         return (r.get("machine") or {}).get("revision")
 

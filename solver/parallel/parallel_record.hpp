@@ -89,7 +89,7 @@ struct RebalanceEntry {
   std::int64_t bytes = 0;
 };
 
-// A bodies' layout installed during the run (ParallelRecord::rebuild_log).
+// A rebuild or rebalance of the bodies' layout during the run (ParallelRecord::rebuild_log).
 struct RebuildEntry {
   std::int64_t step = 0;
   bool rebalance = false;
