@@ -635,24 +635,7 @@ class ContactStage {
   // restores them, so the next step is bit-identical; a state without a pair-list reference
   // (e.g. migrated to another rank layout) rebuilds the list at the next step.
   ContactState save_state() const {
-    ContactState s;
-    s.k1 = pk1_.to_host();
-    s.k2 = pk2_.to_host();
-    s.xi = pxi_.to_host();
-    s.h = ph_.to_host();
-    s.energy = pen_.to_host();
-    s.energy_t = pet_.to_host();
-    const std::vector<int> act = pact_.to_host();
-    const std::vector<ContactRecord> rec = rec_.to_host();
-    s.resize(n_prev_);  // the buffers are longer than the history
-    for (std::int64_t c = 0; c < n_prev_; ++c) {
-      s.active[c] = act[c] ? 1 : 0;
-      s.n1[c] = rec[c].n1;
-      for (int k = 0; k < 4; ++k) {
-        s.v[c][k] = rec[c].v[k];
-        s.w[c][k] = rec[c].w[k];
-      }
-    }
+    ContactState s = save_history();
     if (built_) {
       s.ref_centroid = pc_ref_.to_host();
       s.ref_radius = pr_ref_.to_host();
@@ -661,6 +644,30 @@ class ContactStage {
     s.rebuilds = rebuilds_;
     s.steps = steps_;
     s.stats = stats();
+    return s;
+  }
+
+  // The history alone (its n_prev_ entries of the longer buffers), the dissipation and the
+  // deepest overlap: what a distributed rank's export carries (Backend::save_owned).
+  ContactState save_history() const {
+    ContactState s;
+    s.k1 = pk1_.to_host(n_prev_);
+    s.k2 = pk2_.to_host(n_prev_);
+    s.xi = pxi_.to_host(n_prev_);
+    s.h = ph_.to_host(n_prev_);
+    s.energy = pen_.to_host(n_prev_);
+    s.energy_t = pet_.to_host(n_prev_);
+    const std::vector<int> act = pact_.to_host(n_prev_);
+    const std::vector<ContactRecord> rec = rec_.to_host(n_prev_);
+    s.resize(n_prev_);
+    for_each(HostExec{}, n_prev_, [&](std::int64_t c) {
+      s.active[c] = act[c] ? 1 : 0;
+      s.n1[c] = rec[c].n1;
+      for (int k = 0; k < 4; ++k) {
+        s.v[c][k] = rec[c].v[k];
+        s.w[c][k] = rec[c].w[k];
+      }
+    });
     const std::vector<double> acc = acc_.to_host();  // one read-back for both
     s.dissipated = acc[0];
     s.max_overlap_ever = acc[1];

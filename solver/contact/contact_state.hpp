@@ -64,18 +64,23 @@ struct ContactState {
     w.resize(n);
     n1.resize(n, 1);
   }
-  // Appends entry e of `o` (a history entry moved between forms).
+  // Entry j becomes entry e of `o` (a history entry moved between forms).
+  void set(std::size_t j, const ContactState& o, std::size_t e) {
+    k1[j] = o.k1[e];
+    k2[j] = o.k2[e];
+    active[j] = o.active[e];
+    xi[j] = o.xi[e];
+    h[j] = o.h[e];
+    energy[j] = o.energy[e];
+    energy_t[j] = o.energy_t[e];
+    v[j] = o.v[e];
+    w[j] = o.w[e];
+    n1[j] = o.n1[e];
+  }
+  // Appends entry e of `o`.
   void push_back(const ContactState& o, std::size_t e) {
-    k1.push_back(o.k1[e]);
-    k2.push_back(o.k2[e]);
-    active.push_back(o.active[e]);
-    xi.push_back(o.xi[e]);
-    h.push_back(o.h[e]);
-    energy.push_back(o.energy[e]);
-    energy_t.push_back(o.energy_t[e]);
-    v.push_back(o.v[e]);
-    w.push_back(o.w[e]);
-    n1.push_back(o.n1[e]);
+    resize(size() + 1);
+    set(size() - 1, o, e);
   }
 };
 

@@ -152,8 +152,9 @@ void Vec3Buffer::assign(const std::vector<Vec3>& h) {
 
 // The components read in place on the host, from a device through vec3_stage; interleaved on
 // the threads.
-std::vector<Vec3> Vec3Buffer::to_host() const {
-  const std::int64_t n = size();
+std::vector<Vec3> Vec3Buffer::to_host(std::int64_t n) const {
+  if (n > size())
+    throw std::out_of_range("Vec3Buffer::to_host: more entries than the buffer holds");
   const double* c[3] = {x_.cview().p, y_.cview().p, z_.cview().p};
   if (x_.space() != Space::Host) {
     const std::size_t bytes = sizeof(double) * static_cast<std::size_t>(n);

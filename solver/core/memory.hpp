@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -187,9 +188,12 @@ class Buffer {
   void assign(const std::vector<T>& host) {
     assign(host.data(), static_cast<std::int64_t>(host.size()));
   }
-  std::vector<T> to_host() const {
-    std::vector<T> h(n_);
-    if (n_ > 0) space_copy(h.data(), Space::Host, p_, space_, sizeof(T) * n_);
+  std::vector<T> to_host() const { return to_host(n_); }
+  // The first n entries (n <= size()).
+  std::vector<T> to_host(std::int64_t n) const {
+    if (n > n_) throw std::out_of_range("Buffer::to_host: more entries than the buffer holds");
+    std::vector<T> h(n);
+    if (n > 0) space_copy(h.data(), Space::Host, p_, space_, sizeof(T) * n);
     return h;
   }
   void zero() {
@@ -239,7 +243,8 @@ class Vec3Buffer {
     z_.resize(n);
   }
   void assign(const std::vector<Vec3>& h);
-  std::vector<Vec3> to_host() const;
+  std::vector<Vec3> to_host() const { return to_host(size()); }
+  std::vector<Vec3> to_host(std::int64_t n) const;  // the first n (n <= size())
   Buffer<double>& component(int a) { return a == 0 ? x_ : (a == 1 ? y_ : z_); }
   void zero() {
     x_.zero();

@@ -474,16 +474,14 @@ class QdemBackend final : public Backend {
   }
 
   BackendState save_state() override {
-    BackendState s;
-    s.x = x_.to_host();
-    s.v = v_.to_host();
-    s.f = f_.to_host();
-    s.diss_v = diss_v_.to_host();
-    s.diss_t = diss_t_.to_host();
-    s.x0 = x0_.to_host();
-    s.f0 = f0_.to_host();
+    BackendState s = save_fields({nv_, nt_, true, true});
     if (contact_) s.contact = contact_->save_state();
     if (fc_.size() > 0) s.fc = fc_.to_host();
+    return s;
+  }
+  BackendState save_owned(const OwnedPart& part) override {
+    BackendState s = save_fields(part);
+    if (contact_) s.contact = contact_->save_history();
     return s;
   }
 
@@ -602,6 +600,22 @@ class QdemBackend final : public Backend {
   }
 
  private:
+  // The vertex and tet fields of save_state and save_owned.
+  BackendState save_fields(const OwnedPart& part) const {
+    BackendState s;
+    const std::int64_t n = part.vertices;
+    s.x = x_.to_host(n);
+    s.v = v_.to_host(n);
+    if (part.forces) s.f = f_.to_host(n);
+    s.diss_v = diss_v_.to_host(n);
+    s.diss_t = diss_t_.to_host(part.tets);
+    if (part.relaxation) {
+      s.x0 = x0_.to_host(n);
+      s.f0 = f0_.to_host(n);
+    }
+    return s;
+  }
+
   std::string name_;
   std::int64_t nv_ = 0, nt_ = 0, nfv_ = 0, nft_ = 0, nct_ = 0;
   Vec3 gravity_;

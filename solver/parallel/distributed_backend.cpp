@@ -163,7 +163,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   void adopt(const StateSlice& s) override {
     if (!g_) throw std::logic_error("DistributedBackend::adopt before upload");
     const double b0 = seconds("balance"), m0 = seconds("migration"), t0 = MPI_Wtime();
-    redistribute(s, true, true);
+    reassign(s, true);
+    migrate(s);
     setup_balance_s_ += seconds("balance") - b0;
     setup_migration_s_ += seconds("migration") - m0;
     rebuilt_at_ = MPI_Wtime();
@@ -458,6 +459,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   void mark_positions() override { unsupported("mark_positions"); }
   void queue_max_moved() override { unsupported("queue_max_moved"); }
   double max_moved() override { unsupported("max_moved"); }
+  BackendState save_owned(const OwnedPart&) override { unsupported("save_owned"); }
 
   // ---- fluid coupling (sph/solid_coupling.hpp) ---------------------------------------------
   // The coupling reads and writes whole-model arrays by global vertex id, the same on every
@@ -637,27 +639,41 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     return r;
   }
 
-  StateSlice export_state() override {
+  StateSlice export_state() override { return export_slice(true); }
+
+  // This rank's owned vertices and home tets (in their layout's order) and the history of its
+  // records, keys and vertices by global id; the forces only with `forces` (a rebuild of the
+  // layout evaluates them again).
+  StateSlice export_slice(bool forces) {
+    BackendState st = local_->save_owned({L_.n_owned, L_.n_home, forces, relaxing_});
     StateSlice s;
-    const BackendState st = local_->save_state();
-    s.set_vertices(owned_vertices(), st, 0, relaxing_);
+    s.vertex = owned_vertices();
+    s.x = std::move(st.x);
+    s.v = std::move(st.v);
+    s.f = std::move(st.f);
+    s.diss_v = std::move(st.diss_v);
+    s.x0 = std::move(st.x0);
+    s.f0 = std::move(st.f0);
     s.tet = home_tets();
-    s.diss_t.assign(st.diss_t.begin(), st.diss_t.begin() + L_.n_home);
-    // Each history entry once: a rank holds the history of the records it evaluates only
-    // (those anchored at its owned vertices, contact_record.hpp anchor_slot).
+    s.diss_t = std::move(st.diss_t);
     if (!st.contact) return s;
+    // Each history entry once: a rank holds the history of the records it evaluates only
+    // (those anchored at its owned vertices, contact_record.hpp anchor_slot). An inactive
+    // entry is never looked up. Gathered on the threads.
     const ContactState& c = *st.contact;
-    s.contact.dissipated = c.dissipated;  // this rank's share: its records' dissipation
-    for (std::size_t e = 0; e < c.size(); ++e) {
-      if (!c.active[e]) continue;  // an inactive entry is never looked up
-      std::array<std::int64_t, 4> kv{-1, -1, -1, -1};
-      for (int k = 0; k < 4; ++k)
-        if (c.v[e][k] >= 0) kv[k] = L_.vertices[c.v[e][k]];
-      s.contact.push_back(c, e);
-      s.contact.k1.back() = ids_.k1_to_global(c.k1[e]);
-      s.contact.k2.back() = ids_.k2_to_global(c.k1[e], c.k2[e]);
-      s.contact.v.back() = kv;
-    }
+    const std::vector<std::int64_t> keep =
+        select_indices(HostExec{}, static_cast<std::int64_t>(c.size()),
+                       [&](std::int64_t e) { return c.active[e] != 0; });
+    ContactState& h = s.contact;
+    h.dissipated = c.dissipated;  // this rank's share: its records' dissipation
+    h.resize(keep.size());
+    for_each(HostExec{}, static_cast<std::int64_t>(keep.size()), [&](std::int64_t j) {
+      const std::int64_t e = keep[j];
+      h.set(j, c, e);
+      h.k1[j] = ids_.k1_to_global(c.k1[e]);
+      h.k2[j] = ids_.k2_to_global(c.k1[e], c.k2[e]);
+      for (int k = 0; k < 4; ++k) h.v[j][k] = c.v[e][k] >= 0 ? L_.vertices[c.v[e][k]] : -1;
+    });
     return s;
   }
 
@@ -980,16 +996,19 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     {
       auto scope = timers_.scope("migration");
       auto s1 = timers_.scope("migration.export");
-      s = export_state();
-      s.f.clear();  // compute_forces evaluates them after the rebuild
+      s = export_slice(false);
     }
     // A new cut that moves no vertex (timing noise) keeps the rank's model; a moved band
     // always rebuilds the ghosts.
-    redistribute(s, rebalance, rebuild);
+    const std::int64_t changed = reassign(s, rebalance);
+    if (changed > 0)
+      migrate(s);
+    else if (rebuild)
+      install_own(s);
     rebuilt_at_ = MPI_Wtime();
     rebuild_s_ = rebuilt_at_ - t0;
     RebuildEntry& e =
-        rebuild_log_.emplace_back(RebuildEntry{steps_, rebalance, slack_, rebuild_s_, {}});
+        rebuild_log_.emplace_back(RebuildEntry{steps_, rebalance, slack_, rebuild_s_, changed, {}});
     for (const auto& [k, v] : timers_.seconds())
       if (k == "balance" || k.starts_with("migration."))
         e.parts[k] = v - seconds_of(parts0, k.c_str());
@@ -1078,11 +1097,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     });
   }
 
-  // Moves the state in `s` (any distribution over the ranks) to its owners and installs the
-  // rank's new part. rebalance: a new partition from the measured costs first; otherwise the
-  // owners are re-read from the current partition at the current positions. Unless `always`,
-  // nothing is rebuilt when no vertex changes owner.
-  void redistribute(const StateSlice& s, bool rebalance, bool always) {
+  // The owners of the free vertices in `s` (any distribution over the ranks). rebalance: a new
+  // partition from the measured costs first; otherwise the current partition's at the current
+  // positions (a curve key each, in parallel). Every rank learns the changes (owner_ covers all
+  // free vertices). The number of free vertices that changed owner (all ranks).
+  std::int64_t reassign(const StateSlice& s, bool rebalance) {
     const std::int64_t nsv = static_cast<std::int64_t>(s.vertex.size());
     if (rebalance || dec_.splitters.empty()) {
       auto scope = timers_.scope("balance");
@@ -1095,11 +1114,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       predicted_after_ = dec_.predicted_imbalance;
     }
     auto scope = timers_.scope("migration");
-    std::optional<PhaseTimers::Scope> part;
-    part.emplace(timers_, "migration.state");
-    std::int64_t bytes = 0;
-    // New owners (a curve key each, in parallel); every rank learns the changes (owner_ covers
-    // all free vertices).
+    auto s1 = timers_.scope("migration.state");
     std::vector<int> dest(nsv);
     for_each(HostExec{}, nsv, [&](std::int64_t k) { dest[k] = dec_.owner(s.x[k]); });
     const std::vector<std::int64_t> moved = select_indices(
@@ -1108,13 +1123,34 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     for_each(HostExec{}, static_cast<std::int64_t>(moved.size()), [&](std::int64_t j) {
       changed[j] = {s.vertex[moved[j]], dest[moved[j]]};
     });
+    std::int64_t bytes = 0;
     const auto all_changed = allgatherv(comm_, changed, &bytes);
+    migrated_bytes_ += bytes;
     for (const auto& [gv, r] : all_changed) owner_[gv] = static_cast<std::int32_t>(r);
     if (!all_changed.empty()) update_body_ranks();
-    if (all_changed.empty() && !always) {
-      migrated_bytes_ += bytes;
-      return;
-    }
+    return static_cast<std::int64_t>(all_changed.size());
+  }
+
+  // A layout rebuild in which no vertex changed owner: every vertex, tet and history entry
+  // stays on its rank, so the rank's own export (export_slice) is its part, with its halo tets
+  // added (their dissipation is counted by their home ranks; here it starts again from zero).
+  void install_own(StateSlice& s) {
+    auto scope = timers_.scope("migration");
+    s.tet.insert(s.tet.end(), L_.tets.begin() + L_.n_home, L_.tets.end());
+    s.diss_t.resize(L_.tets.size(), 0.0);
+    install(s);
+  }
+
+  // Moves the state in `s` (any distribution over the ranks) to the owners reassign gave and
+  // installs the rank's new part.
+  void migrate(const StateSlice& s) {
+    const std::int64_t nsv = static_cast<std::int64_t>(s.vertex.size());
+    auto scope = timers_.scope("migration");
+    std::optional<PhaseTimers::Scope> part;
+    part.emplace(timers_, "migration.state");
+    std::int64_t bytes = 0;
+    std::vector<int> dest(nsv);
+    for_each(HostExec{}, nsv, [&](std::int64_t k) { dest[k] = owner_[s.vertex[k]]; });
 
     // Vertices: id, x, v, dissipation (and the force of the last evaluation when the slice has
     // it, the relaxation start state while relaxing; a rank without them sends zeros). The plans
@@ -1470,23 +1506,24 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
         if (lk[e].first != FeatureIds::kNone)
           lk[e].second = lm_.ids.k2_to_local(sc.k1[e], sc.k2[e]);
       });
-      std::vector<std::size_t> hidx;
-      for (std::int64_t e = 0; e < nsc; ++e)
-        if (lk[e].first != FeatureIds::kNone && lk[e].second != FeatureIds::kNone)
-          hidx.push_back(e);
+      std::vector<std::int64_t> hidx = select_indices(HostExec{}, nsc, [&](std::int64_t e) {
+        return lk[e].first != FeatureIds::kNone && lk[e].second != FeatureIds::kNone;
+      });
       std::sort(hidx.begin(), hidx.end(), [&](auto a, auto b) { return lk[a] < lk[b]; });
       hidx.erase(
           std::unique(hidx.begin(), hidx.end(), [&](auto a, auto b) { return lk[a] == lk[b]; }),
           hidx.end());
       ContactState& c = st.contact.emplace();
       c.dissipated = s.contact.dissipated;
-      for (std::size_t e : hidx) {
-        c.push_back(sc, e);
-        c.k1.back() = lk[e].first;
-        c.k2.back() = lk[e].second;
+      c.resize(hidx.size());
+      for_each(HostExec{}, static_cast<std::int64_t>(hidx.size()), [&](std::int64_t j) {
+        const std::int64_t e = hidx[j];
+        c.set(j, sc, e);
+        c.k1[j] = lk[e].first;
+        c.k2[j] = lk[e].second;
         for (int q = 0; q < 4; ++q)
-          if (sc.v[e][q] >= 0) c.v.back()[q] = lm_.ids.local_vertex(sc.v[e][q]);
-      }
+          if (sc.v[e][q] >= 0) c.v[j][q] = lm_.ids.local_vertex(sc.v[e][q]);
+      });
     }
     local_->load_state(st);
     if (first_halo) halo_->engine().use_device(local_->space() == Space::Cuda, 6 * sizeof(double));
@@ -1551,13 +1588,13 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   LocalModel lm_;  // the last layout's model, its storage reused by the next (install)
   std::vector<std::int32_t> tet_slot_;  // per free tet: its slot in install's slice (or stale)
   BackendState installed_;              // the state install hands the backend (storage kept)
-  // redistribute's work arrays: the migrated state as it came and in gid order, and each tet's
+  // migrate's work arrays: the migrated state as it came and in gid order, and each tet's
   // destination ranks (CSR).
   StateSlice arrived_, mine_;
   std::vector<std::int64_t> tet_off_;
   std::vector<int> tet_ranks_;
   std::unique_ptr<HaloPlan> halo_;
-  // The rebuilds' migrations of vertices, tets and contact history (redistribute).
+  // The rebuilds' migrations of vertices, tets and contact history (migrate).
   std::unique_ptr<MigratePlan> vertex_plan_, history_plan_;
   std::unique_ptr<CommEngine> tet_plan_;
   bool contact_ = false, preload_ = false, relaxing_ = false;

@@ -59,6 +59,7 @@ Json ParallelRecord::to_json() const {
     r["rebalance"] = e.rebalance;
     r["slack"] = e.slack;
     r["seconds"] = e.seconds;
+    r["owners_changed"] = e.owners_changed;
     for (const auto& [k, v] : e.parts) parts[k] = v;
     r["parts"] = parts;
     rebuilt.push_back(r);

@@ -94,6 +94,7 @@ struct RebuildEntry {
   std::int64_t step = 0;
   bool rebalance = false;
   double slack = 0, seconds = 0;
+  std::int64_t owners_changed = 0;  // free vertices that changed owner (all ranks)
   std::map<std::string, double> parts;
 };
 
