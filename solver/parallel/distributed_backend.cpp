@@ -197,14 +197,17 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     drift_marked_ = false;
     if (!drifted) queue_skin_and_pack(tm, true);
     start_halo(tm, dt_diss, drifted ? &drifted_ : nullptr);
-    // The ranks' skin-test reduction travels while the halo's records do; a rebuild discards
-    // what arrived and exchanges again on the new layout.
-    start_skin_test();
-    finish_halo(tm);
     if (maybe_rebuild(dynamic)) {
       queue_skin_and_pack(tm, false);
       start_halo(tm, dt_diss);
-      finish_halo(tm);
+    }
+    CommEngine& e = halo_->engine();
+    {
+      auto s = tm.launch("halo");
+      auto s1 = tm.launch("halo.xv");
+      const auto in = e.finish_packed();
+      local_->unpack_halo(reinterpret_cast<const double*>(in.data()), e.packed_space());
+      halo_bytes_ += e.last_bytes();
     }
     // Each vertex's own contact entries and the element forces' gather (queued after the
     // contact evaluation) run while the shares are read and exchanged (on a GPU): these scopes
@@ -958,26 +961,6 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
   }
 
-  // The largest distance a vertex moved since the layout, over the ranks (the skin test
-  // queue_skin_and_pack queued), reduced without waiting: maybe_rebuild waits for it.
-  void start_skin_test() {
-    if (!contact_) return;
-    auto s = timers_.launch("halo");
-    auto s1 = timers_.launch("halo.skin");
-    skin_moved_ = local_->max_moved();
-    MPI_Iallreduce(&skin_moved_, &skin_max_, 1, MPI_DOUBLE, MPI_MAX, comm_, &skin_req_);
-  }
-
-  // Finishes the exchange start_halo began: the ghosts' x and v into the backend.
-  void finish_halo(PhaseTimers& tm) {
-    CommEngine& e = halo_->engine();
-    auto s = tm.launch("halo");
-    auto s1 = tm.launch("halo.xv");
-    const auto in = e.finish_packed();
-    local_->unpack_halo(reinterpret_cast<const double*>(in.data()), e.packed_space());
-    halo_bytes_ += e.last_bytes();
-  }
-
   // Rebuilds when some vertex moved `slack` (contact band: the skin test compute_forces
   // queued) or, every rebalance_every steps, when the measured imbalance exceeds the threshold
   // and a new cut pays for its rebuild (recut_pays; a threshold of 0 re-cuts at every
@@ -988,8 +971,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     if (contact_) {
       auto s = timers_.launch("halo");
       auto s1 = timers_.launch("halo.skin");
-      MPI_Wait(&skin_req_, MPI_STATUS_IGNORE);
-      rebuild = skin_max_ > slack_;
+      const double moved = local_->max_moved();
+      double m = 0;
+      MPI_Allreduce(&moved, &m, 1, MPI_DOUBLE, MPI_MAX, comm_);
+      rebuild = m > slack_;
     }
     if (dynamic && steps_ % opt_.rebalance_every == 0) {
       const Window w = measure_window();
@@ -1000,6 +985,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
     if (!rebuild && !rebalance) return false;
     // The exchange and the interior tets of the old layout are not used.
+    halo_->engine().finish_packed();
     local_->undo_dissipation();
     hold_flags();
     if (rebuild && !rebalance) adapt_slack();
@@ -1617,8 +1603,6 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   bool drift_marked_ = false;
   DeviceMark drifted_;
   double band_ = 1, slack_ = 0;
-  double skin_moved_ = 0, skin_max_ = 0;  // start_skin_test's reduction, in flight
-  MPI_Request skin_req_ = MPI_REQUEST_NULL;
   double reach_ = 0, slack0_ = 0;          // diam + D_DEM; the first slack (set_slack)
   double rebuild_s_ = 0, rebuilt_at_ = 0;  // the last rebuild's seconds, its end (MPI_Wtime)
   std::unordered_map<std::uint64_t, std::vector<std::int64_t>> fixed_cells_;
