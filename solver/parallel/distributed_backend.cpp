@@ -999,7 +999,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       s = export_slice(false);
     }
     // A new cut that moves no vertex (timing noise) keeps the rank's model; a moved band
-    // always rebuilds the ghosts.
+    // always rebuilds the ghosts, from the rank's own export when no vertex changed owner.
     const std::int64_t changed = reassign(s, rebalance);
     if (changed > 0)
       migrate(s);
