@@ -172,6 +172,10 @@ class Backend {
     bool forces = false, relaxation = false;
   };
   virtual BackendState save_owned(const OwnedPart& part) = 0;
+  // upload, for a model with the last upload's tets and free vertices in the same order (a
+  // distributed rank's ghosts rebuilt, its owned part the same): the tets' reference shapes,
+  // volumes and materials and the free vertices' corner lists stay as they are.
+  virtual void upload_same_tets(const Model& model) = 0;
   // Enables the fluid coupling force fc (zero until the fluid writes it); views stay valid
   // until the next upload.
   virtual SolidViews solid_views();

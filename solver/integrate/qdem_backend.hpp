@@ -34,7 +34,14 @@ class QdemBackend final : public Backend {
   explicit QdemBackend(std::string name) : name_(std::move(name)) {}
   std::string name() const override { return name_; }
 
-  void upload(const Model& m) override {
+  void upload(const Model& m) override { upload_model(m, false); }
+  void upload_same_tets(const Model& m) override { upload_model(m, true); }
+
+  // same_tets: the tets' reference data and the corner lists on the device stand (their
+  // shapes, volumes and materials; the owned vertices' lists of corners).
+  void upload_model(const Model& m, bool same_tets) {
+    if (same_tets && (m.n_tets() != nt_ || m.n_free_vertices != nfv_))
+      throw std::logic_error("upload_same_tets: the model has other tets or free vertices");
     nv_ = m.n_vertices();
     nt_ = m.n_tets();
     nfv_ = m.n_free_vertices;
@@ -63,18 +70,20 @@ class QdemBackend final : public Backend {
         for (int k = 0; k < 4; ++k) tv[k * nt + t] = m.tets[t][k];
       });
     });
-    write_on_host(dxi_, 9 * nt, stage_, [&](double* dxi) {
-      for_each(HostExec{}, nt, [&](std::int64_t t) {
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c) dxi[(3 * r + c) * nt + t] = m.dX_inv[t].m[r][c];
-      });
-    });
-    assign_on_threads(vol0_, m.vol0, stage_);
-    assign_on_threads(tmat_, m.tet_material, stage_);
     mats_.assign(m.materials);
-    tf_.resize_for_overwrite(4 * nt_);  // element_forces writes every corner it gathers
-    diss_t_.resize(nt_);
-    upload_corner_lists(m);
+    if (!same_tets) {
+      write_on_host(dxi_, 9 * nt, stage_, [&](double* dxi) {
+        for_each(HostExec{}, nt, [&](std::int64_t t) {
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) dxi[(3 * r + c) * nt + t] = m.dX_inv[t].m[r][c];
+        });
+      });
+      assign_on_threads(vol0_, m.vol0, stage_);
+      assign_on_threads(tmat_, m.tet_material, stage_);
+      tf_.resize_for_overwrite(4 * nt_);  // element_forces writes every corner it gathers
+      diss_t_.resize(nt_);
+      upload_corner_lists(m);
+    }
     flag_.resize(1);
     if (!m.contact.enabled) {
       contact_.reset();

@@ -460,6 +460,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   void queue_max_moved() override { unsupported("queue_max_moved"); }
   double max_moved() override { unsupported("max_moved"); }
   BackendState save_owned(const OwnedPart&) override { unsupported("save_owned"); }
+  void upload_same_tets(const Model&) override { unsupported("upload_same_tets"); }
 
   // ---- fluid coupling (sph/solid_coupling.hpp) ---------------------------------------------
   // The coupling reads and writes whole-model arrays by global vertex id, the same on every
@@ -1448,9 +1449,14 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       halo_->gather_begin(f);
       halo_->gather_finish(f);
     }
+    // The same owned vertices and held tets as the last layout (a rebuild of the ghosts that
+    // moved no vertex): the tets' reference data stay in the model and on the device.
+    const bool same_tets =
+        rebuilds_ > 0 && L.n_owned == L_.n_owned && L.tets == L_.tets &&
+        std::equal(L.vertices.begin(), L.vertices.begin() + L.n_owned, L_.vertices.begin());
     {
       auto s1 = timers_.scope("migration.layout.model");
-      build_local_model(g, ix_, L, st.x, st.v, lm_);
+      build_local_model(g, ix_, L, st.x, st.v, lm_, true, same_tets);
     }
     part.reset();
     part.emplace(timers_, "migration.upload");
@@ -1464,7 +1470,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
     {
       auto s1 = timers_.scope("migration.upload.model");
-      local_->upload(lm_.model);
+      if (same_tets)
+        local_->upload_same_tets(lm_.model);
+      else
+        local_->upload(lm_.model);
     }
     local_->use_preload(preload_);
     st.x0.clear();

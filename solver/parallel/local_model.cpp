@@ -105,7 +105,7 @@ LocalModel build_local_model(const Model& g, const ModelIndex& ix, const LocalLa
 // shrinks a little from one layout to the next, and nothing of its old contents is copied.
 void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& L,
                        const std::vector<Vec3>& x, const std::vector<Vec3>& v, LocalModel& out,
-                       bool with_contact) {
+                       bool with_contact, bool same_tets) {
   const std::int64_t nv = static_cast<std::int64_t>(L.vertices.size());
   if (static_cast<std::int64_t>(x.size()) != nv || static_cast<std::int64_t>(v.size()) != nv)
     throw std::invalid_argument("build_local_model: x and v need one entry per listed vertex");
@@ -150,7 +150,9 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
     ids.vertex[i] = gv;
   });
   const std::int64_t nt = static_cast<std::int64_t>(L.tets.size());
-  fit(nt, m.tets, m.dX_inv, m.vol0, m.tet_material, m.tet_gid);
+  if (same_tets && static_cast<std::int64_t>(m.tet_gid.size()) != nt)
+    throw std::logic_error("build_local_model: same_tets for a model of other tets");
+  if (!same_tets) fit(nt, m.tets, m.dX_inv, m.vol0, m.tet_material, m.tet_gid);
   std::atomic<std::int64_t> missing{-1};  // a vertex of a held item not in the layout
   for_each(HostExec{}, nt, [&](std::int64_t j) {
     const std::int64_t t = L.tets[j];
@@ -159,6 +161,7 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
       m.tets[j][k] = g2l[gi];
       if (g2l[gi] < 0) missing.store(gi, std::memory_order_relaxed);
     }
+    if (same_tets) return;
     m.dX_inv[j] = g.dX_inv[t];
     m.vol0[j] = g.vol0[t];
     m.tet_material[j] = g.tet_material[t];
@@ -177,23 +180,25 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   // order with no sort (GPU-size dominoes, 786 k tets a rank, one thread: 6 ms, against 66 ms
   // for the upload's atomic fill and per-vertex sort by tet id).
   std::vector<std::int32_t>& tl = out.tet_local;
-  number(tl, g.n_tets(), L.tets);
   const std::int64_t no = L.n_owned;
-  offsets(no, m.corner_off, [&](std::int64_t i) {
-    return ix.corner_off[4 * L.vertices[i] + 4] - ix.corner_off[4 * L.vertices[i]];
-  });
-  fit(m.corner_off[no], m.corner_ent);
   std::atomic<std::int64_t> unheld{-1};  // a tet of an owned vertex not held
-  for_each(HostExec{}, no, [&](std::int64_t i) {
-    const std::int64_t gv = L.vertices[i];
-    std::int64_t o = m.corner_off[i];
-    for (std::int64_t k = 0; k < 4; ++k)
-      for (std::int64_t q = ix.corner_off[4 * gv + k]; q < ix.corner_off[4 * gv + k + 1]; ++q) {
-        const std::int32_t t = tl[ix.corner_tet[q]];
-        if (t < 0) unheld.store(ix.corner_tet[q], std::memory_order_relaxed);
-        m.corner_ent[o++] = k * nt + t;
-      }
-  });
+  if (!same_tets) {
+    number(tl, g.n_tets(), L.tets);
+    offsets(no, m.corner_off, [&](std::int64_t i) {
+      return ix.corner_off[4 * L.vertices[i] + 4] - ix.corner_off[4 * L.vertices[i]];
+    });
+    fit(m.corner_off[no], m.corner_ent);
+    for_each(HostExec{}, no, [&](std::int64_t i) {
+      const std::int64_t gv = L.vertices[i];
+      std::int64_t o = m.corner_off[i];
+      for (std::int64_t k = 0; k < 4; ++k)
+        for (std::int64_t q = ix.corner_off[4 * gv + k]; q < ix.corner_off[4 * gv + k + 1]; ++q) {
+          const std::int32_t t = tl[ix.corner_tet[q]];
+          if (t < 0) unheld.store(ix.corner_tet[q], std::memory_order_relaxed);
+          m.corner_ent[o++] = k * nt + t;
+        }
+    });
+  }
   if (unheld >= 0)
     throw std::logic_error("build_local_model: tet " + std::to_string(unheld) +
                            " of an owned vertex is not in the layout");
