@@ -83,14 +83,16 @@ inline ParallelOptions options(long every, double threshold, const std::string& 
   return o;
 }
 
-// A one-rank reference and the distributed run of the same model, stepped side by side.
+// A one-rank reference and the distributed run of the same model, stepped side by side, on
+// `backend` ("cpu", or "cuda": a GPU a rank).
 struct SideBySide {
-  std::unique_ptr<Backend> ref_be = make_host_backend();
+  std::unique_ptr<Backend> ref_be;
   std::unique_ptr<DistributedBackend> dist;
   double dt;
   Stepper ref, st;
-  SideBySide(const Model& m, const ParallelOptions& opt)
-      : dist(make_distributed_backend(MPI_COMM_WORLD, make_host_backend(), opt)),
+  SideBySide(const Model& m, const ParallelOptions& opt, const std::string& backend = "cpu")
+      : ref_be(make_backend(backend)),
+        dist(make_distributed_backend(MPI_COMM_WORLD, make_backend(backend), opt)),
         dt(choose_dt(m, std::nullopt, 0.5)),
         ref(uploaded(*ref_be, m), *ref_be, dt),
         st(uploaded(*dist, m), *dist, dt) {}
