@@ -37,62 +37,6 @@ class QdemBackend final : public Backend {
   void upload(const Model& m) override { upload_model(m, false); }
   void upload_same_tets(const Model& m) override { upload_model(m, true); }
 
-  // same_tets: the tets' reference data and the corner lists on the device stand (their
-  // shapes, volumes and materials; the owned vertices' lists of corners).
-  void upload_model(const Model& m, bool same_tets) {
-    if (same_tets && (m.n_tets() != nt_ || m.n_free_vertices != nfv_))
-      throw std::logic_error("upload_same_tets: the model has other tets or free vertices");
-    nv_ = m.n_vertices();
-    nt_ = m.n_tets();
-    nfv_ = m.n_free_vertices;
-    nft_ = m.n_free_tets;
-    nct_ = m.n_counted_tets < 0 ? nft_ : m.n_counted_tets;
-    gravity_ = m.gravity;
-    X_.assign(m.X);
-    x_.assign(m.x);
-    v_.assign(m.v);
-    f_.resize(nv_);
-    fc_.resize(0);
-    fext_.assign(m.fext);
-    fpre_.assign(m.fpre);
-    assign_on_threads(mass_, m.mass, stage_);
-    assign_on_threads(inv_mass_, m.inv_mass, stage_);
-    assign_on_threads(relax_inv_mass_, m.relax_inv_mass, stage_);
-    const std::int64_t nv = nv_, nt = nt_;
-    write_on_host(held_, nv, stage_, [&](std::uint8_t* held) {
-      for_each(HostExec{}, nv, [&](std::int64_t i) { held[i] = held_components(m.flags[i]); });
-    });
-    x0_.resize(nv_);  // relaxation start state (mark_relax_start)
-    f0_.resize(nv_);
-    diss_v_.resize(nv_);
-    write_on_host(tv_, 4 * nt, stage_, [&](std::int32_t* tv) {
-      for_each(HostExec{}, nt, [&](std::int64_t t) {
-        for (int k = 0; k < 4; ++k) tv[k * nt + t] = m.tets[t][k];
-      });
-    });
-    mats_.assign(m.materials);
-    if (!same_tets) {
-      write_on_host(dxi_, 9 * nt, stage_, [&](double* dxi) {
-        for_each(HostExec{}, nt, [&](std::int64_t t) {
-          for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 3; ++c) dxi[(3 * r + c) * nt + t] = m.dX_inv[t].m[r][c];
-        });
-      });
-      assign_on_threads(vol0_, m.vol0, stage_);
-      assign_on_threads(tmat_, m.tet_material, stage_);
-      tf_.resize_for_overwrite(4 * nt_);  // element_forces writes every corner it gathers
-      diss_t_.resize(nt_);
-      upload_corner_lists(m);
-    }
-    flag_.resize(1);
-    if (!m.contact.enabled) {
-      contact_.reset();
-    } else {
-      if (!contact_) contact_ = std::make_unique<ContactStage<Exec>>();
-      contact_->upload(m);  // a re-upload keeps the stage's storage
-    }
-  }
-
   // Vertex -> (corner k, tet t) lists of the gathered vertices [0, nfv), entries k * nt + t,
   // ordered by (k, global tet id): on one rank that is increasing order; a rank of a distributed
   // run sums the corners of its vertices in the same order, so forces agree with one rank bit for
@@ -609,6 +553,62 @@ class QdemBackend final : public Backend {
   }
 
  private:
+  // same_tets: the tets' reference data and the corner lists on the device stand (their
+  // shapes, volumes and materials; the owned vertices' lists of corners).
+  void upload_model(const Model& m, bool same_tets) {
+    if (same_tets && (m.n_tets() != nt_ || m.n_free_vertices != nfv_))
+      throw std::logic_error("upload_same_tets: the model has other tets or free vertices");
+    nv_ = m.n_vertices();
+    nt_ = m.n_tets();
+    nfv_ = m.n_free_vertices;
+    nft_ = m.n_free_tets;
+    nct_ = m.n_counted_tets < 0 ? nft_ : m.n_counted_tets;
+    gravity_ = m.gravity;
+    X_.assign(m.X);
+    x_.assign(m.x);
+    v_.assign(m.v);
+    f_.resize(nv_);
+    fc_.resize(0);
+    fext_.assign(m.fext);
+    fpre_.assign(m.fpre);
+    assign_on_threads(mass_, m.mass, stage_);
+    assign_on_threads(inv_mass_, m.inv_mass, stage_);
+    assign_on_threads(relax_inv_mass_, m.relax_inv_mass, stage_);
+    const std::int64_t nv = nv_, nt = nt_;
+    write_on_host(held_, nv, stage_, [&](std::uint8_t* held) {
+      for_each(HostExec{}, nv, [&](std::int64_t i) { held[i] = held_components(m.flags[i]); });
+    });
+    x0_.resize(nv_);  // relaxation start state (mark_relax_start)
+    f0_.resize(nv_);
+    diss_v_.resize(nv_);
+    write_on_host(tv_, 4 * nt, stage_, [&](std::int32_t* tv) {
+      for_each(HostExec{}, nt, [&](std::int64_t t) {
+        for (int k = 0; k < 4; ++k) tv[k * nt + t] = m.tets[t][k];
+      });
+    });
+    mats_.assign(m.materials);
+    if (!same_tets) {
+      write_on_host(dxi_, 9 * nt, stage_, [&](double* dxi) {
+        for_each(HostExec{}, nt, [&](std::int64_t t) {
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) dxi[(3 * r + c) * nt + t] = m.dX_inv[t].m[r][c];
+        });
+      });
+      assign_on_threads(vol0_, m.vol0, stage_);
+      assign_on_threads(tmat_, m.tet_material, stage_);
+      tf_.resize_for_overwrite(4 * nt_);  // element_forces writes every corner it gathers
+      diss_t_.resize(nt_);
+      upload_corner_lists(m);
+    }
+    flag_.resize(1);
+    if (!m.contact.enabled) {
+      contact_.reset();
+    } else {
+      if (!contact_) contact_ = std::make_unique<ContactStage<Exec>>();
+      contact_->upload(m);  // a re-upload keeps the stage's storage
+    }
+  }
+
   // The vertex and tet fields of save_state and save_owned.
   BackendState save_fields(const OwnedPart& part) const {
     BackendState s;
