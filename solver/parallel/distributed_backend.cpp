@@ -129,6 +129,13 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
 
   void upload(const Model& m) override {
     g_ = &m;
+    // install finds a rank's tets body by body: the free bodies' tets must tile the free tets.
+    std::int64_t tiled = 0;
+    for (const BodyRange& r : m.bodies)
+      if (!r.fixed && r.t_begin == tiled) tiled = r.t_end;
+    if (tiled != m.n_free_tets)
+      throw std::logic_error("distributed upload: the free bodies' tets do not tile the model's " +
+                             std::to_string(m.n_free_tets) + " free tets");
     ix_ = index_model(m);
     owner_.assign(m.n_vertices(), -1);  // fixed bodies: no owner
     body_rank_.assign(m.bodies.size(), -1);
@@ -1302,22 +1309,43 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     L.vertices = s.vertex;
     L.n_owned = static_cast<std::int64_t>(s.vertex.size());
     // Held tets: every free tet with an owned vertex (the owned vertices are those owner_
-    // gives this rank), in id order; interior, boundary home, halo. Each tet's class is
-    // decided in parallel, then the tets are bucketed by class (in parallel too).
-    std::vector<std::uint8_t> cls(g.n_free_tets);
+    // gives this rank), in id order; interior, boundary home, halo. A body one rank owns whole
+    // (body_rank_) gives all its tets to that rank as interior tets and none to the others, so
+    // the candidates are the tets of this rank's whole bodies and of split bodies (body by
+    // body: in id order), not the global model's. Each candidate's class is decided in
+    // parallel, then the candidates are bucketed by class (in parallel too).
+    const std::vector<BodyRange>& bodies = g.bodies;
+    const auto nb = static_cast<std::int64_t>(bodies.size());
+    std::vector<std::int64_t> first(nb + 1, 0);  // each body's candidates in `cand`
+    for (std::int64_t b = 0; b < nb; ++b) {
+      const bool mine = !bodies[b].fixed && (body_rank_[b] < 0 || body_rank_[b] == me_);
+      first[b + 1] = first[b] + (mine ? bodies[b].t_end - bodies[b].t_begin : 0);
+    }
+    std::vector<std::int64_t> cand(first[nb]);
+    for_each(HostExec{}, nb, [&](std::int64_t b) {
+      for (std::int64_t k = first[b]; k < first[b + 1]; ++k)
+        cand[k] = bodies[b].t_begin + (k - first[b]);
+    });
+    const auto nc = static_cast<std::int64_t>(cand.size());
+    std::vector<std::uint8_t> cls(nc);
     enum : std::uint8_t { kInterior, kBoundary, kHalo, kNotHeld };
-    for_each(HostExec{}, g.n_free_tets, [&](std::int64_t t) {
-      const auto& tv = g.tets[t];
+    for_each(HostExec{}, nc, [&](std::int64_t j) {
+      const auto& tv = g.tets[cand[j]];
+      if (body_rank_[g.body[tv[0]]] == me_) {
+        cls[j] = kInterior;
+        return;
+      }
       int owned = 0;
       for (int q = 0; q < 4; ++q) owned += owner_[tv[q]] == me_;
-      cls[t] = owned == 4                                               ? kInterior
+      cls[j] = owned == 4                                               ? kInterior
                : owner_[*std::min_element(tv.begin(), tv.end())] == me_ ? kBoundary
                : owned > 0                                              ? kHalo
                                                                         : kNotHeld;
     });
-    Buckets held =
-        bucket_indices(HostExec{}, g.n_free_tets, kNotHeld, [&](std::int64_t t) { return cls[t]; });
-    L.tets = std::move(held.index);
+    Buckets held = bucket_indices(HostExec{}, nc, kNotHeld, [&](std::int64_t j) { return cls[j]; });
+    resize_for_overwrite(L.tets, held.index.size());
+    for_each(HostExec{}, static_cast<std::int64_t>(held.index.size()),
+             [&](std::int64_t k) { L.tets[k] = cand[held.index[k]]; });
     L.n_interior = held.start[kBoundary];
     L.n_home = held.start[kHalo];
     L.body_whole.resize(body_rank_.size());
@@ -1378,8 +1406,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     });
     auto other_ranks = [&](std::int64_t i, std::vector<int>& r) {
       const std::int64_t gv = s.vertex[i];
-      for (std::int64_t q = ix_.corner_off[4 * gv]; q < ix_.corner_off[4 * gv + 4]; ++q)
-        if (cls[ix_.corner_tet[q]] != kInterior)  // else all its vertices are this rank's
+      if (body_rank_[g.body[gv]] != me_)  // else all its tets' vertices are this rank's
+        for (std::int64_t q = ix_.corner_off[4 * gv]; q < ix_.corner_off[4 * gv + 4]; ++q)
           for (auto u : g.tets[ix_.corner_tet[q]])
             if (owner_[u] != me_) r.push_back(owner_[u]);
       if (band[i]) r.insert(r.end(), band[i]->begin(), band[i]->end());
