@@ -1312,7 +1312,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     // gives this rank), in id order; interior, boundary home, halo. A body one rank owns whole
     // (body_rank_) gives all its tets to that rank as interior tets and none to the others, so
     // the candidates are the tets of this rank's whole bodies and of split bodies (body by
-    // body: in id order), not the global model's. Each candidate's class is decided in
+    // body: in id order), not the global model's. A split body's tets are classed in
     // parallel, then the candidates are bucketed by class (in parallel too).
     const std::vector<BodyRange>& bodies = g.bodies;
     const auto nb = static_cast<std::int64_t>(bodies.size());
@@ -1321,20 +1321,20 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       const bool mine = !bodies[b].fixed && (body_rank_[b] < 0 || body_rank_[b] == me_);
       first[b + 1] = first[b] + (mine ? bodies[b].t_end - bodies[b].t_begin : 0);
     }
-    std::vector<std::int64_t> cand(first[nb]);
-    for_each(HostExec{}, nb, [&](std::int64_t b) {
-      for (std::int64_t k = first[b]; k < first[b + 1]; ++k)
-        cand[k] = bodies[b].t_begin + (k - first[b]);
-    });
-    const auto nc = static_cast<std::int64_t>(cand.size());
+    const std::int64_t nc = first[nb];
+    std::vector<std::int64_t> cand(nc);
     std::vector<std::uint8_t> cls(nc);
-    enum : std::uint8_t { kInterior, kBoundary, kHalo, kNotHeld };
-    for_each(HostExec{}, nc, [&](std::int64_t j) {
-      const auto& tv = g.tets[cand[j]];
-      if (body_rank_[g.body[tv[0]]] == me_) {
-        cls[j] = kInterior;
-        return;
+    enum : std::uint8_t { kInterior, kBoundary, kHalo, kNotHeld, kUnclassed };
+    for_each(HostExec{}, nb, [&](std::int64_t b) {
+      const std::uint8_t c = body_rank_[b] == me_ ? kInterior : kUnclassed;
+      for (std::int64_t k = first[b]; k < first[b + 1]; ++k) {
+        cand[k] = bodies[b].t_begin + (k - first[b]);
+        cls[k] = c;
       }
+    });
+    for_each(HostExec{}, nc, [&](std::int64_t j) {
+      if (cls[j] != kUnclassed) return;
+      const auto& tv = g.tets[cand[j]];
       int owned = 0;
       for (int q = 0; q < 4; ++q) owned += owner_[tv[q]] == me_;
       cls[j] = owned == 4                                               ? kInterior

@@ -19,6 +19,37 @@ std::int64_t local_of(const std::vector<std::int32_t>& to_local, std::int64_t gi
   return gid >= 0 && gid < static_cast<std::int64_t>(to_local.size()) ? to_local[gid] : -1;
 }
 
+// Per-body offsets of n items whose bodies body_of(i) never decrease (ModelIndex), else empty.
+template <class BodyOf>
+std::vector<std::int64_t> body_offsets(std::int64_t n_bodies, std::int64_t n, BodyOf body_of) {
+  std::vector<std::int64_t> off(n_bodies + 1, 0);
+  for (std::int64_t i = 0; i < n; ++i) {
+    if (i > 0 && body_of(i) < body_of(i - 1)) return {};
+    ++off[body_of(i) + 1];
+  }
+  std::partial_sum(off.begin(), off.end(), off.begin());
+  return off;
+}
+
+// The items of the touched bodies in order (off: ModelIndex's per-body offsets; empty: all n).
+std::vector<std::int64_t> items_of(const std::vector<std::int64_t>& off,
+                                   const std::vector<std::uint8_t>& touched, std::int64_t n) {
+  if (off.empty()) {
+    std::vector<std::int64_t> all(n);
+    std::iota(all.begin(), all.end(), std::int64_t{0});
+    return all;
+  }
+  const auto nb = static_cast<std::int64_t>(touched.size());
+  std::vector<std::int64_t> first(nb + 1, 0);
+  for (std::int64_t b = 0; b < nb; ++b)
+    first[b + 1] = first[b] + (touched[b] ? off[b + 1] - off[b] : 0);
+  std::vector<std::int64_t> items(first[nb]);
+  for_each(HostExec{}, nb, [&](std::int64_t b) {
+    for (std::int64_t k = first[b]; k < first[b + 1]; ++k) items[k] = off[b] + (k - first[b]);
+  });
+  return items;
+}
+
 }  // namespace
 
 ModelIndex index_model(const Model& g) {
@@ -53,6 +84,12 @@ ModelIndex index_model(const Model& g) {
       ix.prim_radius = std::max(ix.prim_radius, norm(g.X[c.prim_v[p][k]] - ctr));
   }
   for (auto w : c.wall_vertices) ix.wall_vertex[w] = 1;
+  const auto nb = static_cast<std::int64_t>(g.bodies.size());
+  ix.body_prim_off = body_offsets(nb, np, [&](std::int64_t p) { return c.prim_body[p]; });
+  ix.body_tri_off = body_offsets(nb, static_cast<std::int64_t>(c.tri_v.size()),
+                                 [&](std::int64_t s) { return c.tri_body[s]; });
+  ix.body_edge_off = body_offsets(nb, static_cast<std::int64_t>(c.edges.size()),
+                                  [&](std::int64_t e) { return g.body[c.edges[e][0]]; });
   ix.tri_edges.resize(c.tri_v.size());
   for (std::size_t s = 0; s < c.tri_v.size(); ++s)
     for (int q = 0; q < 3; ++q) {
@@ -246,47 +283,74 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   c.pair_E = gc.pair_E;
   c.dt_limit = gc.dt_limit;
 
-  // Primitives with every vertex local, in global order (free bodies first): each global
-  // primitive tested in parallel, the kept ones collected in order.
-  const std::int64_t ngp = static_cast<std::int64_t>(gc.prim_v.size());
-  const std::vector<std::int64_t> prims = select_indices(HostExec{}, ngp, [&](std::int64_t p) {
-    bool all = true;
-    for (int k = 0; k < 4; ++k) all = all && (gc.prim_v[p][k] < 0 || g2l[gc.prim_v[p][k]] >= 0);
-    return all;
+  // Only the bodies with a local vertex can hold a primitive, triangle or edge: their items
+  // (ModelIndex's per-body ranges) are the candidates, not the global model's, whose count
+  // grows with the rank count.
+  std::vector<std::uint8_t> touched(g.bodies.size(), 0);
+  for_each(HostExec{}, nv, [&](std::int64_t i) {
+    std::atomic_ref<std::uint8_t>(touched[g.body[L.vertices[i]]])
+        .store(1, std::memory_order_relaxed);
   });
+  // Primitives with every vertex local, in global order (free bodies first): each candidate
+  // tested in parallel, the kept ones collected in order.
+  const std::vector<std::int64_t> cand_prims =
+      items_of(ix.body_prim_off, touched, static_cast<std::int64_t>(gc.prim_v.size()));
+  std::vector<std::int64_t> prims =
+      select_indices(HostExec{}, static_cast<std::int64_t>(cand_prims.size()), [&](std::int64_t k) {
+        const std::array<std::int32_t, 4>& pv = gc.prim_v[cand_prims[k]];
+        bool all = true;
+        for (int q = 0; q < 4; ++q) all = all && (pv[q] < 0 || g2l[pv[q]] >= 0);
+        return all;
+      });
+  for_each(HostExec{}, static_cast<std::int64_t>(prims.size()),
+           [&](std::int64_t j) { prims[j] = cand_prims[prims[j]]; });
   const auto npl = static_cast<std::int64_t>(prims.size());
-  // Their triangles and the triangles' edges, in global order (marked, then collected), and
-  // global -> local numbers (-1: not held), in the ids' kept arrays.
-  auto clear = [&](std::vector<std::int32_t>& marks, std::int64_t n) {
-    fit(n, marks);
-    for_each(HostExec{}, n, [&](std::int64_t e) { marks[e] = 0; });
-  };
+  // Their triangles and the triangles' edges, in global order (the candidates marked, then
+  // collected), and global -> local numbers (-1: not held) in the ids' kept arrays: the last
+  // build's entries are reset, then the candidates' written.
   auto mark = [](std::int32_t& m) {
     std::atomic_ref<std::int32_t>(m).store(1, std::memory_order_relaxed);
   };
-  auto collect = [](std::vector<std::int32_t>& marks, std::vector<std::int64_t>& out) {
-    const auto n = static_cast<std::int64_t>(marks.size());
-    out = select_indices(HostExec{}, n, [&](std::int64_t e) { return marks[e] != 0; });
-    for_each(HostExec{}, n, [&](std::int64_t e) { marks[e] = -1; });
-    for_each(HostExec{}, static_cast<std::int64_t>(out.size()),
-             [&](std::int64_t j) { marks[out[j]] = static_cast<std::int32_t>(j); });
+  auto clear = [&](std::vector<std::int32_t>& marks, std::int64_t n,
+                   const std::vector<std::int64_t>& last, const std::vector<std::int64_t>& cand) {
+    if (static_cast<std::int64_t>(marks.size()) != n)
+      marks.assign(static_cast<std::size_t>(n), -1);
+    else
+      for_each(HostExec{}, static_cast<std::int64_t>(last.size()),
+               [&](std::int64_t j) { marks[last[j]] = -1; });
+    for_each(HostExec{}, static_cast<std::int64_t>(cand.size()),
+             [&](std::int64_t k) { marks[cand[k]] = 0; });
+  };
+  auto collect = [](std::vector<std::int32_t>& marks, const std::vector<std::int64_t>& cand,
+                    std::vector<std::int64_t>& out) {
+    const auto nc = static_cast<std::int64_t>(cand.size());
+    out = select_indices(HostExec{}, nc, [&](std::int64_t k) { return marks[cand[k]] != 0; });
+    for_each(HostExec{}, nc, [&](std::int64_t k) { marks[cand[k]] = -1; });
+    for_each(HostExec{}, static_cast<std::int64_t>(out.size()), [&](std::int64_t j) {
+      out[j] = cand[out[j]];
+      marks[out[j]] = static_cast<std::int32_t>(j);
+    });
   };
   std::vector<std::int64_t>& tris = ids.triangle;
   std::vector<std::int32_t>& tri_l = ids.triangle_local;
-  clear(tri_l, static_cast<std::int64_t>(gc.tri_v.size()));
+  const std::vector<std::int64_t> cand_tris =
+      items_of(ix.body_tri_off, touched, static_cast<std::int64_t>(gc.tri_v.size()));
+  clear(tri_l, static_cast<std::int64_t>(gc.tri_v.size()), tris, cand_tris);
   for_each(HostExec{}, npl, [&](std::int64_t j) {
     for (std::int64_t q = gc.prim_tri_off[prims[j]]; q < gc.prim_tri_off[prims[j] + 1]; ++q)
       mark(tri_l[gc.prim_tri[q]]);
   });
-  collect(tri_l, tris);
+  collect(tri_l, cand_tris, tris);
   const auto ntl = static_cast<std::int64_t>(tris.size());
   std::vector<std::int64_t>& edges = ids.edge;
   std::vector<std::int32_t>& edge_l = ids.edge_local;
-  clear(edge_l, static_cast<std::int64_t>(gc.edges.size()));
+  const std::vector<std::int64_t> cand_edges =
+      items_of(ix.body_edge_off, touched, static_cast<std::int64_t>(gc.edges.size()));
+  clear(edge_l, static_cast<std::int64_t>(gc.edges.size()), edges, cand_edges);
   for_each(HostExec{}, ntl, [&](std::int64_t j) {
     for (int q = 0; q < 3; ++q) mark(edge_l[ix.tri_edges[tris[j]][q]]);
   });
-  collect(edge_l, edges);
+  collect(edge_l, cand_edges, edges);
   const auto nel = static_cast<std::int64_t>(edges.size());
   // The local lists, written in parallel (CSR offsets first).
   auto lv = [&](std::int64_t gid) {  // local index; a missing vertex is recorded

@@ -38,8 +38,12 @@ struct ModelIndex {
   std::vector<std::int32_t> corner_tet;
   std::vector<std::int32_t> tets_at;  // free tets whose smallest vertex id is this vertex
   std::vector<std::array<std::int32_t, 3>> tri_edges;  // surface triangle -> its edges
-  std::vector<std::uint8_t> contact_vertex;            // a vertex of some contact primitive
-  std::vector<std::uint8_t> wall_vertex;               // tested against walls
+  // Per body, its contact primitives, triangles and edges (an edge's body: its first vertex's):
+  // items [off[b], off[b + 1]) of body b where the model keeps them grouped by body in body
+  // order (build_model does), else empty (a rank's part then tests every item).
+  std::vector<std::int64_t> body_prim_off, body_tri_off, body_edge_off;
+  std::vector<std::uint8_t> contact_vertex;  // a vertex of some contact primitive
+  std::vector<std::uint8_t> wall_vertex;     // tested against walls
   double prim_radius = 0;  // largest primitive radius (centroid to vertex) in the reference
 };
 

@@ -318,9 +318,52 @@ TEST(LocalModel, BuildIntoAnEarlierPartsStorageEqualsAFreshBuild) {
     EXPECT_EQ(ca.n_free_prims, cb.n_free_prims);
     EXPECT_TRUE(same(reused.ids.vertex, fresh.ids.vertex) &&
                 same(reused.ids.triangle, fresh.ids.triangle) &&
-                same(reused.ids.edge, fresh.ids.edge));
+                same(reused.ids.edge, fresh.ids.edge) &&
+                same(reused.ids.triangle_local, fresh.ids.triangle_local) &&
+                same(reused.ids.edge_local, fresh.ids.edge_local));
     if (contact) EXPECT_GT(cb.prim_v.size(), 0u);
   }
+}
+
+// A part's primitives, triangles and edges are found among its bodies' (ModelIndex's per-body
+// ranges): after a build of the other body's part into the same storage, the part names none of
+// that body's features, and equals a fresh build, global -> local maps included.
+TEST(LocalModel, APartAfterAnotherBodysPartHoldsOnlyItsBodysFeatures) {
+  auto pb = make_problem(kTwoBodies);
+  const Model& g = pb.model;
+  const ModelIndex ix = index_model(g);
+  const ContactModel& c = g.contact;
+  ASSERT_EQ(ix.body_tri_off.size(), 3u);
+  ASSERT_EQ(ix.body_prim_off.size(), 3u);
+  ASSERT_EQ(ix.body_edge_off.size(), 3u);
+  for (std::int64_t b = 0; b < 2; ++b) {
+    for (auto s = ix.body_tri_off[b]; s < ix.body_tri_off[b + 1]; ++s) EXPECT_EQ(c.tri_body[s], b);
+    for (auto p = ix.body_prim_off[b]; p < ix.body_prim_off[b + 1]; ++p)
+      EXPECT_EQ(c.prim_body[p], b);
+    for (auto e = ix.body_edge_off[b]; e < ix.body_edge_off[b + 1]; ++e)
+      EXPECT_EQ(g.body[c.edges[e][0]], b);
+  }
+  EXPECT_EQ(ix.body_tri_off[2], static_cast<std::int64_t>(c.tri_v.size()));
+  auto values = [&](const LocalLayout& L, const std::vector<Vec3>& from) {
+    std::vector<Vec3> out;
+    for (auto gv : L.vertices) out.push_back(from[gv]);
+    return out;
+  };
+  const LocalLayout a = layout_of(g, ix, 0, 0.3025), b = layout_of(g, ix, 1, 0.3025);
+  LocalModel reused;
+  build_local_model(g, ix, b, values(b, g.x), values(b, g.v), reused);
+  ASSERT_GT(reused.ids.triangle.size(), 0u);
+  build_local_model(g, ix, a, values(a, g.x), values(a, g.v), reused);
+  const LocalModel fresh = build_local_model(g, ix, a, values(a, g.x), values(a, g.v));
+  EXPECT_EQ(reused.ids.triangle, fresh.ids.triangle);
+  EXPECT_EQ(reused.ids.edge, fresh.ids.edge);
+  EXPECT_EQ(reused.ids.triangle_local, fresh.ids.triangle_local);
+  EXPECT_EQ(reused.ids.edge_local, fresh.ids.edge_local);
+  EXPECT_EQ(reused.model.contact.prim_v, fresh.model.contact.prim_v);
+  ASSERT_GT(fresh.ids.triangle.size(), 0u);
+  for (auto s : fresh.ids.triangle) EXPECT_EQ(c.tri_body[s], 0);
+  for (auto s = ix.body_tri_off[1]; s < ix.body_tri_off[2]; ++s)
+    EXPECT_EQ(reused.ids.triangle_local[s], -1);
 }
 
 // A part's corner lists (taken from the global index, not sorted) hold each owned vertex's
