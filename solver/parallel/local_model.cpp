@@ -168,14 +168,28 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
                              " of a held item is not in the layout");
     return l;
   };
-  // Per-vertex and per-tet copies from the global model, one parallel pass each.
-  fit(nv, m.X, m.x, m.v, m.fext, m.fpre, m.mass, m.inv_mass, m.relax_inv_mass, m.flags, m.gid,
-      m.body, ids.vertex);
+  // Per-vertex and per-tet copies from the global model, one parallel pass each. same_tets:
+  // the owned vertices' reference data and the interior tets' vertex numbers (owned vertices
+  // only) stand, the arrays keep their prefix as the ghosts change; x and v are written whole.
+  const std::int64_t no = L.n_owned;
+  if (same_tets) {
+    for (auto* a : {&m.X, &m.x, &m.v, &m.fext, &m.fpre}) a->resize(nv);
+    for (auto* a : {&m.mass, &m.inv_mass, &m.relax_inv_mass}) a->resize(nv);
+    m.flags.resize(nv);
+    m.gid.resize(nv);
+    m.body.resize(nv);
+    fit(nv, ids.vertex);
+  } else {
+    fit(nv, m.X, m.x, m.v, m.fext, m.fpre, m.mass, m.inv_mass, m.relax_inv_mass, m.flags, m.gid,
+        m.body, ids.vertex);
+  }
   for_each(HostExec{}, nv, [&](std::int64_t i) {
     const std::int64_t gv = L.vertices[i];
-    m.X[i] = g.X[gv];
     m.x[i] = x[i];
     m.v[i] = v[i];
+    ids.vertex[i] = gv;
+    if (same_tets && i < no) return;
+    m.X[i] = g.X[gv];
     m.fext[i] = g.fext[gv];
     m.fpre[i] = g.fpre[gv];
     m.mass[i] = g.mass[gv];
@@ -184,15 +198,15 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
     m.flags[i] = g.flags[gv];
     m.gid[i] = g.gid[gv];
     m.body[i] = g.body[gv];
-    ids.vertex[i] = gv;
   });
   const std::int64_t nt = static_cast<std::int64_t>(L.tets.size());
-  if (same_tets && static_cast<std::int64_t>(m.tet_gid.size()) != nt)
+  if (same_tets && (static_cast<std::int64_t>(m.tet_gid.size()) != nt || m.n_free_vertices != no))
     throw std::logic_error("build_local_model: same_tets for a model of other tets");
   if (!same_tets) fit(nt, m.tets, m.dX_inv, m.vol0, m.tet_material, m.tet_gid);
   std::atomic<std::int64_t> missing{-1};  // a vertex of a held item not in the layout
-  for_each(HostExec{}, nt, [&](std::int64_t j) {
-    const std::int64_t t = L.tets[j];
+  const std::int64_t t0 = same_tets ? L.n_interior : 0;
+  for_each(HostExec{}, nt - t0, [&](std::int64_t jj) {
+    const std::int64_t j = t0 + jj, t = L.tets[j];
     for (int k = 0; k < 4; ++k) {
       const std::int32_t gi = g.tets[t][k];
       m.tets[j][k] = g2l[gi];
@@ -217,7 +231,6 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   // order with no sort (GPU-size dominoes, 786 k tets a rank, one thread: 6 ms, against 66 ms
   // for the upload's atomic fill and per-vertex sort by tet id).
   std::vector<std::int32_t>& tl = out.tet_local;
-  const std::int64_t no = L.n_owned;
   std::atomic<std::int64_t> unheld{-1};  // a tet of an owned vertex not held
   if (!same_tets) {
     number(tl, g.n_tets(), L.tets);

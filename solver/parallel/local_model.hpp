@@ -98,8 +98,9 @@ LocalModel build_local_model(const Model& global, const ModelIndex& index,
 // The same into `out`, whose arrays (an earlier part's) keep their storage: a rank rebuilding
 // its part every few hundred steps touches no fresh pages for the large ones. same_tets: `out`
 // was built for a layout with the same owned vertices and tets, in the same order (a rebuild
-// of the ghosts alone): the tets' reference data and the owned vertices' corner lists stand,
-// only the tets' local vertex numbers are written again.
+// of the ghosts alone): the tets' reference data, the owned vertices' reference data and
+// corner lists, and the interior tets' vertex numbers stand; x and v, the ghosts and the other
+// tets' vertex numbers are written again.
 void build_local_model(const Model& global, const ModelIndex& index, const LocalLayout& layout,
                        const std::vector<Vec3>& x, const std::vector<Vec3>& v, LocalModel& out,
                        bool with_contact = true, bool same_tets = false);

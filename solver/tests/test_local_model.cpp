@@ -272,20 +272,53 @@ TEST_P(TwoParts, OnTheGpuGiveTheWholeModelsForcesBitForBit) {
 // A rebuild into an earlier part's LocalModel (the distributed backend keeps one, so that its
 // arrays' storage is reused) gives the same model as a fresh build, here from a larger part into
 // a smaller one, and without contact after with.
-TEST(LocalModel, BuildIntoAnEarlierPartsStorageEqualsAFreshBuild) {
-  auto pb = make_problem(kScene);
-  const Model& g = pb.model;
-  const ModelIndex ix = index_model(g);
-  auto values = [&](const LocalLayout& L, const std::vector<Vec3>& from) {
-    std::vector<Vec3> out;
-    for (auto gv : L.vertices) out.push_back(from[gv]);
-    return out;
-  };
+// Every array of two parts' models and ids, byte for byte.
+void expect_same_parts(const LocalModel& reused, const LocalModel& fresh) {
   auto same = [](const auto& a, const auto& b) {
     using T = typename std::decay_t<decltype(a)>::value_type;
     return a.size() == b.size() &&
            (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
   };
+  const Model &a = reused.model, &b = fresh.model;
+  EXPECT_TRUE(same(a.X, b.X) && same(a.x, b.x) && same(a.v, b.v) && same(a.fext, b.fext) &&
+              same(a.fpre, b.fpre) && same(a.mass, b.mass) && same(a.inv_mass, b.inv_mass) &&
+              same(a.relax_inv_mass, b.relax_inv_mass) && same(a.flags, b.flags) &&
+              same(a.gid, b.gid) && same(a.body, b.body));
+  EXPECT_TRUE(same(a.tets, b.tets) && same(a.dX_inv, b.dX_inv) && same(a.vol0, b.vol0) &&
+              same(a.tet_material, b.tet_material) && same(a.tet_gid, b.tet_gid) &&
+              same(a.corner_off, b.corner_off) && same(a.corner_ent, b.corner_ent));
+  EXPECT_EQ(a.n_free_vertices, b.n_free_vertices);
+  EXPECT_EQ(a.n_free_tets, b.n_free_tets);
+  EXPECT_EQ(a.n_counted_tets, b.n_counted_tets);
+  const ContactModel &ca = a.contact, &cb = b.contact;
+  EXPECT_EQ(ca.enabled, cb.enabled);
+  EXPECT_TRUE(same(ca.tri_v, cb.tri_v) && same(ca.tri_body, cb.tri_body) &&
+              same(ca.edges, cb.edges) && same(ca.edge_tri, cb.edge_tri) &&
+              same(ca.own_v_off, cb.own_v_off) && same(ca.own_e_off, cb.own_e_off) &&
+              same(ca.own_v, cb.own_v) && same(ca.own_e, cb.own_e));
+  EXPECT_TRUE(same(ca.prim_v, cb.prim_v) && same(ca.prim_body, cb.prim_body) &&
+              same(ca.prim_tri_off, cb.prim_tri_off) && same(ca.prim_tri, cb.prim_tri) &&
+              same(ca.wall_vertices, cb.wall_vertices) && same(ca.body_h, cb.body_h));
+  EXPECT_EQ(ca.n_free_prims, cb.n_free_prims);
+  EXPECT_TRUE(same(reused.ids.vertex, fresh.ids.vertex) &&
+              same(reused.ids.triangle, fresh.ids.triangle) &&
+              same(reused.ids.edge, fresh.ids.edge) &&
+              same(reused.ids.vertex_local, fresh.ids.vertex_local) &&
+              same(reused.ids.triangle_local, fresh.ids.triangle_local) &&
+              same(reused.ids.edge_local, fresh.ids.edge_local));
+}
+
+// A layout's values of a per-vertex global array.
+std::vector<Vec3> values(const LocalLayout& L, const std::vector<Vec3>& from) {
+  std::vector<Vec3> out;
+  for (auto gv : L.vertices) out.push_back(from[gv]);
+  return out;
+}
+
+TEST(LocalModel, BuildIntoAnEarlierPartsStorageEqualsAFreshBuild) {
+  auto pb = make_problem(kScene);
+  const Model& g = pb.model;
+  const ModelIndex ix = index_model(g);
   const LocalLayout big = layout_of(g, ix, 0, 0.45), small = layout_of(g, ix, 1, 0.45);
   ASSERT_GT(big.tets.size(), small.tets.size());
   LocalModel reused;
@@ -294,34 +327,34 @@ TEST(LocalModel, BuildIntoAnEarlierPartsStorageEqualsAFreshBuild) {
     build_local_model(g, ix, small, values(small, g.x), values(small, g.v), reused, contact);
     const LocalModel fresh =
         build_local_model(g, ix, small, values(small, g.x), values(small, g.v), contact);
-    const Model &a = reused.model, &b = fresh.model;
-    EXPECT_TRUE(same(a.X, b.X) && same(a.x, b.x) && same(a.v, b.v) && same(a.fext, b.fext) &&
-                same(a.fpre, b.fpre) && same(a.mass, b.mass) && same(a.inv_mass, b.inv_mass) &&
-                same(a.relax_inv_mass, b.relax_inv_mass) && same(a.flags, b.flags) &&
-                same(a.gid, b.gid) && same(a.body, b.body));
-    EXPECT_TRUE(same(a.tets, b.tets) && same(a.dX_inv, b.dX_inv) && same(a.vol0, b.vol0) &&
-                same(a.tet_material, b.tet_material) && same(a.tet_gid, b.tet_gid) &&
-                same(a.corner_off, b.corner_off) && same(a.corner_ent, b.corner_ent));
-    EXPECT_EQ(a.n_free_vertices, b.n_free_vertices);
-    EXPECT_EQ(a.n_free_tets, b.n_free_tets);
-    EXPECT_EQ(a.n_counted_tets, b.n_counted_tets);
-    const ContactModel &ca = a.contact, &cb = b.contact;
-    EXPECT_EQ(ca.enabled, contact);
-    EXPECT_EQ(cb.enabled, contact);
-    EXPECT_TRUE(same(ca.tri_v, cb.tri_v) && same(ca.tri_body, cb.tri_body) &&
-                same(ca.edges, cb.edges) && same(ca.edge_tri, cb.edge_tri) &&
-                same(ca.own_v_off, cb.own_v_off) && same(ca.own_e_off, cb.own_e_off) &&
-                same(ca.own_v, cb.own_v) && same(ca.own_e, cb.own_e));
-    EXPECT_TRUE(same(ca.prim_v, cb.prim_v) && same(ca.prim_body, cb.prim_body) &&
-                same(ca.prim_tri_off, cb.prim_tri_off) && same(ca.prim_tri, cb.prim_tri) &&
-                same(ca.wall_vertices, cb.wall_vertices) && same(ca.body_h, cb.body_h));
-    EXPECT_EQ(ca.n_free_prims, cb.n_free_prims);
-    EXPECT_TRUE(same(reused.ids.vertex, fresh.ids.vertex) &&
-                same(reused.ids.triangle, fresh.ids.triangle) &&
-                same(reused.ids.edge, fresh.ids.edge) &&
-                same(reused.ids.triangle_local, fresh.ids.triangle_local) &&
-                same(reused.ids.edge_local, fresh.ids.edge_local));
-    if (contact) EXPECT_GT(cb.prim_v.size(), 0u);
+    expect_same_parts(reused, fresh);
+    EXPECT_EQ(fresh.model.contact.enabled, contact);
+    if (contact) EXPECT_GT(fresh.model.contact.prim_v.size(), 0u);
+  }
+}
+
+// A rebuild of the ghosts alone (the same owned vertices and tets, same_tets: the owned
+// vertices' and tets' reference data stand) into the last part's storage equals a fresh
+// build, whether the ghosts grow or shrink, with x and v of the new build.
+TEST(LocalModel, AGhostOnlyRebuildIntoTheLastPartEqualsAFreshBuild) {
+  auto pb = make_problem(kScene);
+  const Model& g = pb.model;
+  const ModelIndex ix = index_model(g);
+  const LocalLayout narrow = layout_of(g, ix, 0, 0.3), wide = layout_of(g, ix, 0, 0.3, 0.25);
+  ASSERT_EQ(narrow.tets, wide.tets);
+  ASSERT_EQ(narrow.n_owned, wide.n_owned);
+  ASSERT_GT(wide.n_free, narrow.n_free);
+  ASSERT_GT(narrow.n_interior, 0);
+  std::vector<Vec3> moved = g.x;
+  for (auto& p : moved) p += Vec3{0.001, -0.002, 0.003};
+  for (const auto& [first, second] : {std::pair{&narrow, &wide}, std::pair{&wide, &narrow}}) {
+    LocalModel reused;
+    build_local_model(g, ix, *first, values(*first, g.x), values(*first, g.v), reused);
+    build_local_model(g, ix, *second, values(*second, moved), values(*second, g.v), reused, true,
+                      true);
+    const LocalModel fresh =
+        build_local_model(g, ix, *second, values(*second, moved), values(*second, g.v));
+    expect_same_parts(reused, fresh);
   }
 }
 
@@ -344,11 +377,6 @@ TEST(LocalModel, APartAfterAnotherBodysPartHoldsOnlyItsBodysFeatures) {
       EXPECT_EQ(g.body[c.edges[e][0]], b);
   }
   EXPECT_EQ(ix.body_tri_off[2], static_cast<std::int64_t>(c.tri_v.size()));
-  auto values = [&](const LocalLayout& L, const std::vector<Vec3>& from) {
-    std::vector<Vec3> out;
-    for (auto gv : L.vertices) out.push_back(from[gv]);
-    return out;
-  };
   const LocalLayout a = layout_of(g, ix, 0, 0.3025), b = layout_of(g, ix, 1, 0.3025);
   LocalModel reused;
   build_local_model(g, ix, b, values(b, g.x), values(b, g.v), reused);
