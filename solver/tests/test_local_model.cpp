@@ -269,9 +269,6 @@ TEST_P(TwoParts, OnTheGpuGiveTheWholeModelsForcesBitForBit) {
   two_parts_give_the_whole_models_forces("cuda", GetParam().first, GetParam().second);
 }
 
-// A rebuild into an earlier part's LocalModel (the distributed backend keeps one, so that its
-// arrays' storage is reused) gives the same model as a fresh build, here from a larger part into
-// a smaller one, and without contact after with.
 // Every array of two parts' models and ids, byte for byte.
 void expect_same_parts(const LocalModel& reused, const LocalModel& fresh) {
   auto same = [](const auto& a, const auto& b) {
@@ -315,6 +312,9 @@ std::vector<Vec3> values(const LocalLayout& L, const std::vector<Vec3>& from) {
   return out;
 }
 
+// A rebuild into an earlier part's LocalModel (the distributed backend keeps one, so that its
+// arrays' storage is reused) gives the same model as a fresh build, here from a larger part into
+// a smaller one, and without contact after with.
 TEST(LocalModel, BuildIntoAnEarlierPartsStorageEqualsAFreshBuild) {
   auto pb = make_problem(kScene);
   const Model& g = pb.model;
