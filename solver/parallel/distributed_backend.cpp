@@ -129,13 +129,6 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
 
   void upload(const Model& m) override {
     g_ = &m;
-    // install finds a rank's tets body by body: the free bodies' tets must tile the free tets.
-    std::int64_t tiled = 0;
-    for (const BodyRange& r : m.bodies)
-      if (!r.fixed && r.t_begin == tiled) tiled = r.t_end;
-    if (tiled != m.n_free_tets)
-      throw std::logic_error("distributed upload: the free bodies' tets do not tile the model's " +
-                             std::to_string(m.n_free_tets) + " free tets");
     ix_ = index_model(m);
     owner_.assign(m.n_vertices(), -1);  // fixed bodies: no owner
     body_rank_.assign(m.bodies.size(), -1);
@@ -1312,29 +1305,21 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     // gives this rank), in id order; interior, boundary home, halo. A body one rank owns whole
     // (body_rank_) gives all its tets to that rank as interior tets and none to the others, so
     // the candidates are the tets of this rank's whole bodies and of split bodies (body by
-    // body: in id order), not the global model's. A split body's tets are classed in
-    // parallel, then the candidates are bucketed by class (in parallel too).
-    const std::vector<BodyRange>& bodies = g.bodies;
-    const auto nb = static_cast<std::int64_t>(bodies.size());
-    std::vector<std::int64_t> first(nb + 1, 0);  // each body's candidates in `cand`
-    for (std::int64_t b = 0; b < nb; ++b) {
-      const bool mine = !bodies[b].fixed && (body_rank_[b] < 0 || body_rank_[b] == me_);
-      first[b + 1] = first[b] + (mine ? bodies[b].t_end - bodies[b].t_begin : 0);
-    }
-    const std::int64_t nc = first[nb];
-    std::vector<std::int64_t> cand(nc);
+    // body: body_items, in id order), not the global model's. Each candidate's class is decided
+    // in parallel, then the candidates are bucketed by class (in parallel too).
+    std::vector<std::uint8_t> mine(g.bodies.size());
+    for (std::size_t b = 0; b < mine.size(); ++b)
+      mine[b] = !g.bodies[b].fixed && (body_rank_[b] < 0 || body_rank_[b] == me_);
+    const std::vector<std::int64_t> cand = body_items(ix_.body_tet_off, mine);
+    const auto nc = static_cast<std::int64_t>(cand.size());
     std::vector<std::uint8_t> cls(nc);
-    enum : std::uint8_t { kInterior, kBoundary, kHalo, kNotHeld, kUnclassed };
-    for_each(HostExec{}, nb, [&](std::int64_t b) {
-      const std::uint8_t c = body_rank_[b] == me_ ? kInterior : kUnclassed;
-      for (std::int64_t k = first[b]; k < first[b + 1]; ++k) {
-        cand[k] = bodies[b].t_begin + (k - first[b]);
-        cls[k] = c;
-      }
-    });
+    enum : std::uint8_t { kInterior, kBoundary, kHalo, kNotHeld };
     for_each(HostExec{}, nc, [&](std::int64_t j) {
-      if (cls[j] != kUnclassed) return;
       const auto& tv = g.tets[cand[j]];
+      if (body_rank_[g.body[tv[0]]] == me_) {
+        cls[j] = kInterior;
+        return;
+      }
       int owned = 0;
       for (int q = 0; q < 4; ++q) owned += owner_[tv[q]] == me_;
       cls[j] = owned == 4                                               ? kInterior

@@ -19,35 +19,21 @@ std::int64_t local_of(const std::vector<std::int32_t>& to_local, std::int64_t gi
   return gid >= 0 && gid < static_cast<std::int64_t>(to_local.size()) ? to_local[gid] : -1;
 }
 
-// Per-body offsets of n items whose bodies body_of(i) never decrease (ModelIndex), else empty.
+// Per-body offsets of n items whose bodies body_of(i) never decrease (ModelIndex); `what`
+// names the items in the error for a model that does not group them by body.
 template <class BodyOf>
-std::vector<std::int64_t> body_offsets(std::int64_t n_bodies, std::int64_t n, BodyOf body_of) {
+std::vector<std::int64_t> body_offsets(std::int64_t n_bodies, std::int64_t n, const char* what,
+                                       BodyOf body_of) {
   std::vector<std::int64_t> off(n_bodies + 1, 0);
   for (std::int64_t i = 0; i < n; ++i) {
-    if (i > 0 && body_of(i) < body_of(i - 1)) return {};
+    if (i > 0 && body_of(i) < body_of(i - 1))
+      throw std::logic_error(std::string("index_model: the model's ") + what + " " +
+                             std::to_string(i - 1) + " and " + std::to_string(i) +
+                             " are not in body order");
     ++off[body_of(i) + 1];
   }
   std::partial_sum(off.begin(), off.end(), off.begin());
   return off;
-}
-
-// The items of the touched bodies in order (off: ModelIndex's per-body offsets; empty: all n).
-std::vector<std::int64_t> items_of(const std::vector<std::int64_t>& off,
-                                   const std::vector<std::uint8_t>& touched, std::int64_t n) {
-  if (off.empty()) {
-    std::vector<std::int64_t> all(n);
-    std::iota(all.begin(), all.end(), std::int64_t{0});
-    return all;
-  }
-  const auto nb = static_cast<std::int64_t>(touched.size());
-  std::vector<std::int64_t> first(nb + 1, 0);
-  for (std::int64_t b = 0; b < nb; ++b)
-    first[b + 1] = first[b] + (touched[b] ? off[b + 1] - off[b] : 0);
-  std::vector<std::int64_t> items(first[nb]);
-  for_each(HostExec{}, nb, [&](std::int64_t b) {
-    for (std::int64_t k = first[b]; k < first[b + 1]; ++k) items[k] = off[b] + (k - first[b]);
-  });
-  return items;
 }
 
 }  // namespace
@@ -67,6 +53,9 @@ ModelIndex index_model(const Model& g) {
   ix.tets_at.assign(nv, 0);
   for (std::int64_t t = 0; t < nft; ++t)
     ++ix.tets_at[*std::min_element(g.tets[t].begin(), g.tets[t].end())];
+  const auto nb = static_cast<std::int64_t>(g.bodies.size());
+  ix.body_tet_off =
+      body_offsets(nb, g.n_tets(), "tets", [&](std::int64_t t) { return g.body[g.tets[t][0]]; });
   ix.contact_vertex.assign(nv, 0);
   ix.wall_vertex.assign(nv, 0);
   const ContactModel& c = g.contact;
@@ -84,11 +73,11 @@ ModelIndex index_model(const Model& g) {
       ix.prim_radius = std::max(ix.prim_radius, norm(g.X[c.prim_v[p][k]] - ctr));
   }
   for (auto w : c.wall_vertices) ix.wall_vertex[w] = 1;
-  const auto nb = static_cast<std::int64_t>(g.bodies.size());
-  ix.body_prim_off = body_offsets(nb, np, [&](std::int64_t p) { return c.prim_body[p]; });
-  ix.body_tri_off = body_offsets(nb, static_cast<std::int64_t>(c.tri_v.size()),
+  ix.body_prim_off =
+      body_offsets(nb, np, "contact primitives", [&](std::int64_t p) { return c.prim_body[p]; });
+  ix.body_tri_off = body_offsets(nb, static_cast<std::int64_t>(c.tri_v.size()), "triangles",
                                  [&](std::int64_t s) { return c.tri_body[s]; });
-  ix.body_edge_off = body_offsets(nb, static_cast<std::int64_t>(c.edges.size()),
+  ix.body_edge_off = body_offsets(nb, static_cast<std::int64_t>(c.edges.size()), "edges",
                                   [&](std::int64_t e) { return g.body[c.edges[e][0]]; });
   ix.tri_edges.resize(c.tri_v.size());
   for (std::size_t s = 0; s < c.tri_v.size(); ++s)
@@ -103,6 +92,19 @@ ModelIndex index_model(const Model& g) {
 
 std::int64_t FeatureIds::local_vertex(std::int64_t gid) const {
   return local_of(vertex_local, gid);
+}
+
+std::vector<std::int64_t> body_items(const std::vector<std::int64_t>& off,
+                                     const std::vector<std::uint8_t>& chosen) {
+  const auto nb = static_cast<std::int64_t>(chosen.size());
+  std::vector<std::int64_t> first(nb + 1, 0);
+  for (std::int64_t b = 0; b < nb; ++b)
+    first[b + 1] = first[b] + (chosen[b] ? off[b + 1] - off[b] : 0);
+  std::vector<std::int64_t> items(first[nb]);
+  for_each(HostExec{}, nb, [&](std::int64_t b) {
+    for (std::int64_t k = first[b]; k < first[b + 1]; ++k) items[k] = off[b] + (k - first[b]);
+  });
+  return items;
 }
 
 std::uint64_t FeatureIds::k1_to_global(std::uint64_t k1) const {
@@ -306,8 +308,7 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   });
   // Primitives with every vertex local, in global order (free bodies first): each candidate
   // tested in parallel, the kept ones collected in order.
-  const std::vector<std::int64_t> cand_prims =
-      items_of(ix.body_prim_off, touched, static_cast<std::int64_t>(gc.prim_v.size()));
+  const std::vector<std::int64_t> cand_prims = body_items(ix.body_prim_off, touched);
   std::vector<std::int64_t> prims =
       select_indices(HostExec{}, static_cast<std::int64_t>(cand_prims.size()), [&](std::int64_t k) {
         const std::array<std::int32_t, 4>& pv = gc.prim_v[cand_prims[k]];
@@ -346,8 +347,7 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   };
   std::vector<std::int64_t>& tris = ids.triangle;
   std::vector<std::int32_t>& tri_l = ids.triangle_local;
-  const std::vector<std::int64_t> cand_tris =
-      items_of(ix.body_tri_off, touched, static_cast<std::int64_t>(gc.tri_v.size()));
+  const std::vector<std::int64_t> cand_tris = body_items(ix.body_tri_off, touched);
   clear(tri_l, static_cast<std::int64_t>(gc.tri_v.size()), tris, cand_tris);
   for_each(HostExec{}, npl, [&](std::int64_t j) {
     for (std::int64_t q = gc.prim_tri_off[prims[j]]; q < gc.prim_tri_off[prims[j] + 1]; ++q)
@@ -357,8 +357,7 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   const auto ntl = static_cast<std::int64_t>(tris.size());
   std::vector<std::int64_t>& edges = ids.edge;
   std::vector<std::int32_t>& edge_l = ids.edge_local;
-  const std::vector<std::int64_t> cand_edges =
-      items_of(ix.body_edge_off, touched, static_cast<std::int64_t>(gc.edges.size()));
+  const std::vector<std::int64_t> cand_edges = body_items(ix.body_edge_off, touched);
   clear(edge_l, static_cast<std::int64_t>(gc.edges.size()), edges, cand_edges);
   for_each(HostExec{}, ntl, [&](std::int64_t j) {
     for (int q = 0; q < 3; ++q) mark(edge_l[ix.tri_edges[tris[j]][q]]);

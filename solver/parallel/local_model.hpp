@@ -38,16 +38,22 @@ struct ModelIndex {
   std::vector<std::int32_t> corner_tet;
   std::vector<std::int32_t> tets_at;  // free tets whose smallest vertex id is this vertex
   std::vector<std::array<std::int32_t, 3>> tri_edges;  // surface triangle -> its edges
-  // Per body, its contact primitives, triangles and edges (an edge's body: its first vertex's):
-  // items [off[b], off[b + 1]) of body b where the model keeps them grouped by body in body
-  // order (build_model does), else empty (a rank's part then tests every item).
-  std::vector<std::int64_t> body_prim_off, body_tri_off, body_edge_off;
+  // Per body, its tets, contact primitives, triangles and edges (a tet's and an edge's body:
+  // its first vertex's): items [off[b], off[b + 1]) of body b. index_model throws
+  // std::logic_error for a model that does not group them by body in body order (build_model
+  // does): a rank's layout searches only the bodies it touches (body_items).
+  std::vector<std::int64_t> body_tet_off, body_prim_off, body_tri_off, body_edge_off;
   std::vector<std::uint8_t> contact_vertex;  // a vertex of some contact primitive
   std::vector<std::uint8_t> wall_vertex;     // tested against walls
   double prim_radius = 0;  // largest primitive radius (centroid to vertex) in the reference
 };
 
 ModelIndex index_model(const Model& global);
+
+// The items of the chosen bodies, in order: [off[b], off[b + 1]) for each b with chosen[b]
+// (off: one of ModelIndex's per-body offsets).
+std::vector<std::int64_t> body_items(const std::vector<std::int64_t>& off,
+                                     const std::vector<std::uint8_t>& chosen);
 
 // What a rank holds, as global ids in local order (see above).
 struct LocalLayout {

@@ -13,6 +13,7 @@
 #include <memory>
 #include <random>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -360,7 +361,8 @@ TEST(LocalModel, AGhostOnlyRebuildIntoTheLastPartEqualsAFreshBuild) {
 
 // A part's primitives, triangles and edges are found among its bodies' (ModelIndex's per-body
 // ranges): after a build of the other body's part into the same storage, the part names none of
-// that body's features, and equals a fresh build, global -> local maps included.
+// that body's features, and equals a fresh build, global -> local maps included. A model whose
+// items are not in body order is refused.
 TEST(LocalModel, APartAfterAnotherBodysPartHoldsOnlyItsBodysFeatures) {
   auto pb = make_problem(kTwoBodies);
   const Model& g = pb.model;
@@ -369,7 +371,10 @@ TEST(LocalModel, APartAfterAnotherBodysPartHoldsOnlyItsBodysFeatures) {
   ASSERT_EQ(ix.body_tri_off.size(), 3u);
   ASSERT_EQ(ix.body_prim_off.size(), 3u);
   ASSERT_EQ(ix.body_edge_off.size(), 3u);
+  ASSERT_EQ(ix.body_tet_off.size(), 3u);
   for (std::int64_t b = 0; b < 2; ++b) {
+    for (auto t = ix.body_tet_off[b]; t < ix.body_tet_off[b + 1]; ++t)
+      EXPECT_EQ(g.body[g.tets[t][0]], b);
     for (auto s = ix.body_tri_off[b]; s < ix.body_tri_off[b + 1]; ++s) EXPECT_EQ(c.tri_body[s], b);
     for (auto p = ix.body_prim_off[b]; p < ix.body_prim_off[b + 1]; ++p)
       EXPECT_EQ(c.prim_body[p], b);
@@ -392,6 +397,10 @@ TEST(LocalModel, APartAfterAnotherBodysPartHoldsOnlyItsBodysFeatures) {
   for (auto s : fresh.ids.triangle) EXPECT_EQ(c.tri_body[s], 0);
   for (auto s = ix.body_tri_off[1]; s < ix.body_tri_off[2]; ++s)
     EXPECT_EQ(reused.ids.triangle_local[s], -1);
+  // A model that does not keep its items in body order is refused.
+  Model unordered = g;
+  std::swap(unordered.contact.tri_body.front(), unordered.contact.tri_body.back());
+  EXPECT_THROW(index_model(unordered), std::logic_error);
 }
 
 // A part's corner lists (taken from the global index, not sorted) hold each owned vertex's
