@@ -407,9 +407,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   // contact's, and where the halo and elements time of a step goes (halo.skin: the contact
   // band's displacement test; halo.xv: the ghosts' x, v; halo.shares: the contact force shares'
   // exchange; elements.shares: collecting them from the backend), and a rebuild's (export: the
-  // state from the backend; state: owners and migration plans; layout: the rank's new part
-  // and, of it, layout.model its model; upload: into the backend, of it upload.model the
-  // model).
+  // state from the backend; state: owners and migration plans; layout: the rank's new part,
+  // of it layout.tets the held tets, layout.band the contact band's cells and ranks,
+  // layout.halo the halo lists, plan and ghosts' x, v, layout.model the model; upload: into
+  // the backend, of it upload.model the model, upload.state the state, upload.routes the halo
+  // and share lists).
   std::map<std::string, double> stage_seconds() const override {
     const std::map<std::string, double> mine = local_sub_phases();
     constexpr int n = std::size(kBodySubPhases);
@@ -1134,12 +1136,13 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
 
   // A layout rebuild in which no vertex changed owner: every vertex, tet and history entry
   // stays on its rank, so the rank's own export (export_slice) is its part, with its halo tets
-  // added (their dissipation is counted by their home ranks; here it starts again from zero).
+  // added (their dissipation is counted by their home ranks; here it starts again from zero),
+  // and the held tets are the last layout's (they follow from the owners alone).
   void install_own(StateSlice& s) {
     auto scope = timers_.scope("migration");
     s.tet.insert(s.tet.end(), L_.tets.begin() + L_.n_home, L_.tets.end());
     s.diss_t.resize(L_.tets.size(), 0.0);
-    install(s);
+    install(s, true);
   }
 
   // Moves the state in `s` (any distribution over the ranks) to the owners reassign gave and
@@ -1289,24 +1292,14 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     return *plan;
   }
 
-  // Builds the rank's part from its owned state (vertices in gid order, the state of every
-  // tet it will hold in any order, its contact history) and uploads it; the backend's and the
-  // halo plan's arrays take room from their first allocation (BufferRoom).
-  void install(const StateSlice& s) {
-    drift_marked_ = false;
-    const BufferRoom room;
-    std::optional<PhaseTimers::Scope> part;
-    part.emplace(timers_, "migration.layout");
+  // Held tets: every free tet with an owned vertex (the owned vertices are those owner_
+  // gives this rank), in id order; interior, boundary home, halo. A body one rank owns whole
+  // (body_rank_) gives all its tets to that rank as interior tets and none to the others, so
+  // the candidates are the tets of this rank's whole bodies and of split bodies (body by
+  // body: body_items, in id order), not the global model's. Each candidate's class is decided
+  // in parallel, then the candidates are bucketed by class (in parallel too).
+  void held_tets(LocalLayout& L) const {
     const Model& g = *g_;
-    LocalLayout L;
-    L.vertices = s.vertex;
-    L.n_owned = static_cast<std::int64_t>(s.vertex.size());
-    // Held tets: every free tet with an owned vertex (the owned vertices are those owner_
-    // gives this rank), in id order; interior, boundary home, halo. A body one rank owns whole
-    // (body_rank_) gives all its tets to that rank as interior tets and none to the others, so
-    // the candidates are the tets of this rank's whole bodies and of split bodies (body by
-    // body: body_items, in id order), not the global model's. Each candidate's class is decided
-    // in parallel, then the candidates are bucketed by class (in parallel too).
     std::vector<std::uint8_t> mine(g.bodies.size());
     for (std::size_t b = 0; b < mine.size(); ++b)
       mine[b] = !g.bodies[b].fixed && (body_rank_[b] < 0 || body_rank_[b] == me_);
@@ -1333,11 +1326,38 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
              [&](std::int64_t k) { L.tets[k] = cand[held.index[k]]; });
     L.n_interior = held.start[kBoundary];
     L.n_home = held.start[kHalo];
+  }
+
+  // Builds the rank's part from its owned state (vertices in gid order, the state of every
+  // tet it will hold in any order, its contact history) and uploads it; the backend's and the
+  // halo plan's arrays take room from their first allocation (BufferRoom).
+  void install(const StateSlice& s, bool same_owners = false) {
+    drift_marked_ = false;
+    const BufferRoom room;
+    std::optional<PhaseTimers::Scope> part;
+    part.emplace(timers_, "migration.layout");
+    std::optional<PhaseTimers::Scope> sub;  // the layout's and the upload's parts
+    sub.emplace(timers_, "migration.layout.tets");
+    const Model& g = *g_;
+    LocalLayout L;
+    L.vertices = s.vertex;
+    L.n_owned = static_cast<std::int64_t>(s.vertex.size());
+    // With the owners of the last layout (same_owners), its held tets stand: they follow from
+    // the owners alone.
+    if (same_owners) {
+      L.tets.swap(L_.tets);
+      L.n_interior = L_.n_interior;
+      L.n_home = L_.n_home;
+    } else {
+      held_tets(L);
+    }
     L.body_whole.resize(body_rank_.size());
     for (std::size_t b = 0; b < body_rank_.size(); ++b)
       L.body_whole[b] = body_rank_[b] < 0      ? kSplit
                         : body_rank_[b] == me_ ? kWholeHere
                                                : kWholeElsewhere;
+    sub.reset();
+    sub.emplace(timers_, "migration.layout.band");
 
     // Contact band: the cells holding this rank's owned contact vertices, published to all;
     // each vertex's cell and the distinct cells in key order found on the threads (a key per
@@ -1380,6 +1400,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       r.erase(std::unique(r.begin(), r.end()), r.end());
     });
 
+    sub.reset();
+    sub.emplace(timers_, "migration.layout.halo");
     // Halo: an owned vertex goes to the owners of its tets' other vertices (they hold those
     // tets) and, for contact vertices, to the ranks with owned contact vertices in the band.
     // Each vertex's list is sorted, without this rank and repeats (what HaloPlan keeps),
@@ -1465,12 +1487,13 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     // The same owned vertices and held tets as the last layout (a rebuild of the ghosts that
     // moved no vertex): the tets' reference data stay in the model and on the device.
     const bool same_tets =
-        rebuilds_ > 0 && L.n_owned == L_.n_owned && L.tets == L_.tets &&
-        std::equal(L.vertices.begin(), L.vertices.begin() + L.n_owned, L_.vertices.begin());
-    {
-      auto s1 = timers_.scope("migration.layout.model");
-      build_local_model(g, ix_, L, st.x, st.v, lm_, true, same_tets);
-    }
+        same_owners ||
+        (rebuilds_ > 0 && L.n_owned == L_.n_owned && L.tets == L_.tets &&
+         std::equal(L.vertices.begin(), L.vertices.begin() + L.n_owned, L_.vertices.begin()));
+    sub.reset();
+    sub.emplace(timers_, "migration.layout.model");
+    build_local_model(g, ix_, L, st.x, st.v, lm_, true, same_tets);
+    sub.reset();
     part.reset();
     part.emplace(timers_, "migration.upload");
 
@@ -1481,13 +1504,13 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       overlap_acc_ = std::max(overlap_acc_, c["max_overlap_ever"]);
       rebuilds_acc_ += c["pair_rebuilds"];
     }
-    {
-      auto s1 = timers_.scope("migration.upload.model");
-      if (same_tets)
-        local_->upload_same_tets(lm_.model);
-      else
-        local_->upload(lm_.model);
-    }
+    sub.emplace(timers_, "migration.upload.model");
+    if (same_tets)
+      local_->upload_same_tets(lm_.model);
+    else
+      local_->upload(lm_.model);
+    sub.reset();
+    sub.emplace(timers_, "migration.upload.state");
     local_->use_preload(preload_);
     st.x0.clear();
     st.f0.clear();
@@ -1548,6 +1571,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       });
     }
     local_->load_state(st);
+    sub.reset();
+    sub.emplace(timers_, "migration.upload.routes");
     if (first_halo) halo_->engine().use_device(local_->space() == Space::Cuda, 6 * sizeof(double));
     local_->set_halo(halo_->engine().send_index(), L.n_owned, halo_->n_ghost());
     if (contact_) local_->set_share_routes(share_routes(L, lm_.ids));
