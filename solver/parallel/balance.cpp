@@ -42,8 +42,7 @@ void allreduce_sum_same(MPI_Comm comm, double* v, int n) {
 }
 
 Decomposition balance(MPI_Comm comm, std::span<const Vec3> pos, std::span<const double> cost,
-                      Curve curve, double max_cell_fraction, std::vector<std::uint64_t>* keys_out,
-                      std::span<const double> share) {
+                      Curve curve, double max_cell_fraction, std::vector<std::uint64_t>* keys_out) {
   if (pos.size() != cost.size())
     throw std::invalid_argument("balance: positions and costs differ in size");
   int nranks = 1;
@@ -110,9 +109,9 @@ Decomposition balance(MPI_Comm comm, std::span<const Vec3> pos, std::span<const 
     lk[i] = leaves[i].key;
     lc[i] = leaves[i].cost;
   }
-  const std::vector<int> owner = partition_cells(lk, lc, nranks, share);
+  const std::vector<int> owner = partition_cells(lk, lc, nranks);
   d.splitters = partition_splitters(lk, owner, nranks);
-  const PartitionStats st = partition_stats(lc, owner, nranks, share);
+  const PartitionStats st = partition_stats(lc, owner, nranks);
   d.load = st.load;
   d.predicted_imbalance = st.imbalance;
   d.max_cell = st.max_cell;

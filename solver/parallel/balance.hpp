@@ -25,7 +25,7 @@ struct Decomposition {
   std::vector<std::uint64_t> splitters;  // nranks + 1 keys (partition_splitters)
   // The cost model's view of the result: loads per rank summed over leaves.
   std::vector<double> load;
-  double predicted_imbalance = 0;  // max / mean - 1 of `load` over the ranks' shares
+  double predicted_imbalance = 0;  // max / mean - 1 of `load`
   double max_cell = 0;             // the largest leaf cost
   double mean_load = 0;
   std::int64_t leaves = 0;
@@ -40,12 +40,9 @@ const char* curve_name(Curve c);
 // this fraction of the mean rank load (down to the finest grid level). keys (optional):
 // receives each item's key on the new grid, so that a caller who looks up the items' owners
 // (owner_of_key(d.splitters, keys[i]) == d.owner(pos[i])) need not compute them again.
-// share (optional, the same on every rank): each rank's share of the cost (partition_cells);
-// equal shares when empty.
 Decomposition balance(MPI_Comm comm, std::span<const Vec3> pos, std::span<const double> cost,
                       Curve curve, double max_cell_fraction,
-                      std::vector<std::uint64_t>* keys = nullptr,
-                      std::span<const double> share = {});
+                      std::vector<std::uint64_t>* keys = nullptr);
 
 // Sum over ranks with the same result on every rank (reduce to rank 0, then broadcast), so
 // that decisions taken from it agree everywhere.

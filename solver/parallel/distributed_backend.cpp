@@ -1017,7 +1017,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
         e.parts[k] = v - seconds_of(parts0, k.c_str());
     if (rebalance) {
       ++rebalances_;
-      log_.push_back({steps_, last_imbalance_, predicted_after_, migrated_bytes_ - before, share_});
+      log_.push_back({steps_, last_imbalance_, predicted_after_, migrated_bytes_ - before});
       pending_after_ = true;
     }
     return true;
@@ -1052,8 +1052,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     double imbalance = 0, busiest_step_s = 0, rebuild_s = 0;
   };
 
-  // Busy time of each rank since the last window: the imbalance, the time per item that
-  // weights the cost of the next partition, and each rank's share of that cost (speed_shares).
+  // Busy time of each rank since the last window: the imbalance, and the time per item that
+  // weights the cost of the next partition.
   Window measure_window() {
     const double contact = local_contact_seconds();
     const double te = seconds("elements") - contact, ti = seconds("integration");
@@ -1066,8 +1066,6 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
                    static_cast<double>(L_.n_owned),
                    static_cast<double>(n_contact_owned_)};
     mark_[0] = busy, mark_[1] = te, mark_[2] = ti, mark_[3] = contact;
-    std::vector<double> mine(w, w + 7), every(7 * np_);
-    MPI_Allgather(mine.data(), 7, MPI_DOUBLE, every.data(), 7, MPI_DOUBLE, comm_);
     double mx[2] = {w[0], rebuild_s_};
     MPI_Allreduce(MPI_IN_PLACE, mx, 2, MPI_DOUBLE, MPI_MAX, comm_);
     allreduce_sum_same(comm_, w, 7);
@@ -1077,7 +1075,6 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     if (w[4] > 0 && w[1] > 0) w_.tet = w[1] / w[4];
     if (w[5] > 0 && w[2] > 0) w_.vertex = w[2] / w[5];
     if (w[6] > 0 && w[3] > 0) w_.contact = w[3] / w[6];
-    speed_shares(every);
     if (windows_++ == 0) imbalance_initial_ = imb;
     if (pending_after_) {
       log_.back().imbalance_after = imb;
@@ -1086,27 +1083,6 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     last_imbalance_ = imb;
     window_start_ = steps_;
     return {imb, n > 0 ? mx[0] / static_cast<double>(n) : 0.0, mx[1]};
-  }
-
-  // The ranks' shares of the next partition's cost, in proportion to their speeds: a rank's
-  // items over the window (w_ times its tets, owned vertices and owned contact vertices, as
-  // every rank's in `every`, measure_window's rows) are the busy seconds they would take at
-  // the ranks' mean speed; over its busy seconds, its speed. Cores of one host step at
-  // different speeds (2 x H200 host, 8 one-rank copies of the cube block: 49-68 ms a step),
-  // and a step goes at the slowest rank's pace. Half the old share and half the new, so that a
-  // window's noise moves the cut by half as much; every rank computes the same shares.
-  void speed_shares(const std::vector<double>& every) {
-    std::vector<double> speed(np_);
-    double total = 0;
-    for (int r = 0; r < np_; ++r) {
-      const double* row = &every[7 * r];
-      const double fair = w_.tet * row[4] + w_.vertex * row[5] + w_.contact * row[6];
-      if (!(row[0] > 0) || !(fair > 0)) return;  // a rank without items or time: no measure
-      speed[r] = fair / row[0];
-      total += speed[r];
-    }
-    if (share_.empty()) share_.assign(np_, 1.0 / np_);
-    for (int r = 0; r < np_; ++r) share_[r] = 0.5 * share_[r] + 0.5 * speed[r] / total;
   }
 
   // body_rank_ from owner_: a body per thread at a time.
@@ -1137,7 +1113,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
         const std::int64_t gv = s.vertex[k];
         cost[k] = w_.vertex + w_.tet * ix_.tets_at[gv] + (ix_.contact_vertex[gv] ? w_.contact : 0);
       }
-      dec_ = balance(comm_, s.x, cost, curve_, opt_.max_cell_cost, nullptr, share_);
+      dec_ = balance(comm_, s.x, cost, curve_, opt_.max_cell_cost);
       predicted_after_ = dec_.predicted_imbalance;
     }
     auto scope = timers_.scope("migration");
@@ -1691,7 +1667,6 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   double mark_[4] = {0, 0, 0, 0};
   std::int64_t steps_ = 0, window_start_ = 0, windows_ = 0, rebuilds_ = 0, rebalances_ = 0;
   double last_imbalance_ = 0, imbalance_initial_ = 0, predicted_after_ = 0;
-  std::vector<double> share_;  // each rank's share of the cost (speed_shares; empty: equal)
   bool pending_after_ = false;
   std::vector<RebalanceEntry> log_;
   std::vector<RebuildEntry> rebuild_log_;

@@ -49,9 +49,6 @@ Json ParallelRecord::to_json() const {
     r["imbalance_before"] = e.imbalance_before;
     r["imbalance_after"] = e.imbalance_after;
     r["bytes"] = e.bytes;
-    Json sh = Json::array();
-    for (double x : e.shares) sh.push_back(x);
-    r["shares"] = sh;
     log.push_back(r);
   }
   j["rebalance_log"] = log;

@@ -29,10 +29,8 @@
 //   setup_s              the first distribution (the largest over ranks): every item moved from
 //                        its start slice (or a checkpoint's share) to its owner, the fluid's
 //                        first layout
-//   rebalance_log        [{step, imbalance_before, imbalance_after, bytes, shares}];
-//                        imbalance_after is measured over the next window (or the rest of the
-//                        run); shares: each rank's share of the cost the cut gave it, from the
-//                        ranks' measured speeds (equal when empty)
+//   rebalance_log        [{step, imbalance_before, imbalance_after, bytes}]; imbalance_after
+//                        is measured over the next window (or the rest of the run)
 //   rebuild_log          the bodies' layout rebuilds and rebalances during the run:
 //                        [{step, rebalance, slack, seconds, parts}]: the slack it was built
 //                        with [m], this rank's (rank 0's in summary.json) wall seconds of it
@@ -94,7 +92,6 @@ struct RebalanceEntry {
   std::int64_t step = 0;
   double imbalance_before = 0, imbalance_after = 0;
   std::int64_t bytes = 0;
-  std::vector<double> shares;  // each rank's share of the cost the cut gave (empty: equal)
 };
 
 // A rebuild or rebalance of the bodies' layout during the run (ParallelRecord::rebuild_log).

@@ -8,36 +8,9 @@
 
 namespace qdemsph {
 
-namespace {
-
-// The shares' prefix sums S_0 = 0, ..., S_n = 1 (equal shares when `share` is empty).
-std::vector<double> share_bounds(std::span<const double> share, int nranks, const char* who) {
-  std::vector<double> b(nranks + 1, 0.0);
-  if (share.empty()) {
-    for (int r = 0; r <= nranks; ++r) b[r] = static_cast<double>(r) / nranks;
-    return b;
-  }
-  if (static_cast<int>(share.size()) != nranks)
-    throw std::invalid_argument(std::string(who) + ": " + std::to_string(share.size()) +
-                                " shares for " + std::to_string(nranks) + " ranks");
-  for (int r = 0; r < nranks; ++r) {
-    if (!(share[r] > 0) || !std::isfinite(share[r]))
-      throw std::invalid_argument(std::string(who) + ": share of rank " + std::to_string(r) +
-                                  " is not positive and finite");
-    b[r + 1] = b[r] + share[r];
-  }
-  const double total = b[nranks];
-  for (double& x : b) x /= total;
-  b[nranks] = 1;
-  return b;
-}
-
-}  // namespace
-
 std::vector<int> partition_cells(std::span<const std::uint64_t> keys, std::span<const double> cost,
-                                 int nranks, std::span<const double> share) {
+                                 int nranks) {
   if (nranks < 1) throw std::invalid_argument("partition_cells: nranks must be >= 1");
-  const std::vector<double> bound = share_bounds(share, nranks, "partition_cells");
   if (keys.size() != cost.size())
     throw std::invalid_argument("partition_cells: " + std::to_string(keys.size()) + " keys but " +
                                 std::to_string(cost.size()) + " costs");
@@ -57,12 +30,11 @@ std::vector<int> partition_cells(std::span<const std::uint64_t> keys, std::span<
   const bool by_count = !(total > 0);
   const double W = by_count ? static_cast<double>(n) : total;
   double before = 0;  // P_i, summed in curve order (the same on every rank)
-  int r = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const double c = by_count ? 1.0 : cost[i];
-    const double mid = (before + 0.5 * c) / W;
-    while (r < nranks - 1 && mid >= bound[r + 1]) ++r;
-    owner[i] = r;
+    const double mid = before + 0.5 * c;
+    const int r = static_cast<int>(std::floor(mid * nranks / W));
+    owner[i] = std::clamp(r, i > 0 ? owner[i - 1] : 0, nranks - 1);  // round-off guard
     before += c;
   }
   return owner;
@@ -88,9 +60,8 @@ int owner_of_key(std::span<const std::uint64_t> splitters, std::uint64_t key) {
   return static_cast<int>(it - splitters.begin()) - 1;
 }
 
-PartitionStats partition_stats(std::span<const double> cost, std::span<const int> owner, int nranks,
-                               std::span<const double> share) {
-  const std::vector<double> bound = share_bounds(share, nranks, "partition_stats");
+PartitionStats partition_stats(std::span<const double> cost, std::span<const int> owner,
+                               int nranks) {
   PartitionStats s;
   s.load.assign(nranks, 0.0);
   double total = 0;
@@ -101,13 +72,7 @@ PartitionStats partition_stats(std::span<const double> cost, std::span<const int
   }
   s.mean = nranks > 0 ? total / nranks : 0;
   s.max = s.load.empty() ? 0 : *std::max_element(s.load.begin(), s.load.end());
-  double tmax = 0, tsum = 0;  // each rank's load over its share
-  for (int r = 0; r < nranks; ++r) {
-    const double t = s.load[r] / (bound[r + 1] - bound[r]);
-    tmax = std::max(tmax, t);
-    tsum += t;
-  }
-  s.imbalance = tsum > 0 ? tmax / (tsum / nranks) - 1 : 0;
+  s.imbalance = s.mean > 0 ? s.max / s.mean - 1 : 0;
   return s;
 }
 

@@ -1,12 +1,10 @@
 // Load balancing without MPI (STYLE.md item 7): the partition of cells along the curve is
-// contiguous, assigns every cell once and gives each rank its share of the cost (equal, or in
-// proportion to given weights) to within the largest cell cost; the
+// contiguous, assigns every cell once and is balanced to within the largest cell cost; the
 // refined cell tree tiles the domain, nests children in their parent's curve segment and
 // bounds the leaf cost, which bounds the imbalance where particles crowd.
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cmath>
 #include <random>
 #include <set>
 
@@ -18,8 +16,8 @@ using namespace qdemsph;
 namespace {
 
 void check_partition(const std::vector<std::uint64_t>& keys, const std::vector<double>& cost,
-                     int nranks, const std::vector<double>& share = {}) {
-  const std::vector<int> owner = partition_cells(keys, cost, nranks, share);
+                     int nranks) {
+  const std::vector<int> owner = partition_cells(keys, cost, nranks);
   ASSERT_EQ(owner.size(), keys.size());
   for (std::size_t i = 0; i < owner.size(); ++i) {
     ASSERT_GE(owner[i], 0);
@@ -28,14 +26,10 @@ void check_partition(const std::vector<std::uint64_t>& keys, const std::vector<d
       ASSERT_GE(owner[i], owner[i - 1]) << "not contiguous at cell " << i;
     }
   }
-  const PartitionStats s = partition_stats(cost, owner, nranks, share);
-  double weights = 0;
-  for (int r = 0; r < nranks; ++r) weights += share.empty() ? 1.0 : share[r];
-  for (int r = 0; r < nranks; ++r) {
-    const double due = s.mean * nranks * (share.empty() ? 1.0 : share[r]) / weights;
-    EXPECT_LE(std::abs(s.load[r] - due), s.max_cell * (1 + 1e-12) + 1e-12)
+  const PartitionStats s = partition_stats(cost, owner, nranks);
+  for (int r = 0; r < nranks; ++r)
+    EXPECT_LE(std::abs(s.load[r] - s.mean), s.max_cell * (1 + 1e-12) + 1e-12)
         << "rank " << r << " of " << nranks;
-  }
   // Splitters send every listed key, and keys between cells, to the owner.
   const std::vector<std::uint64_t> spl = partition_splitters(keys, owner, nranks);
   for (std::size_t i = 0; i < keys.size(); ++i) {
@@ -72,29 +66,7 @@ TEST(Partition, RandomCostsContiguousAndBounded) {
     }
     SCOPED_TRACE("trial " + std::to_string(trial));
     check_partition(keys, cost, nranks);
-    std::vector<double> share(nranks);  // ranks of speeds differing up to 4 x
-    for (double& w : share) w = 0.25 + U(rng);
-    check_partition(keys, cost, nranks, share);
   }
-}
-
-// Shares in proportion to the ranks' speeds: a rank twice as fast takes twice the cost, and
-// the loads over the shares are even (the imbalance the cut predicts).
-TEST(Partition, SharesSplitInProportion) {
-  std::vector<std::uint64_t> keys(120);
-  for (int i = 0; i < 120; ++i) keys[i] = 3 * i;
-  const std::vector<double> cost(120, 1.0), share{1, 2, 1};
-  const std::vector<int> owner = partition_cells(keys, cost, 3, share);
-  for (int i = 0; i < 120; ++i) EXPECT_EQ(owner[i], i < 30 ? 0 : i < 90 ? 1 : 2) << i;
-  EXPECT_NEAR(partition_stats(cost, owner, 3, share).imbalance, 0.0, 1e-12);
-  // The equal cut, measured against these shares: 40 each, so the load over the share is 160
-  // on ranks 0 and 2 and 80 on rank 1, whose mean is 400 / 3.
-  const std::vector<int> equal = partition_cells(keys, cost, 3);
-  EXPECT_NEAR(partition_stats(cost, equal, 3, share).imbalance, 160.0 / (400.0 / 3) - 1, 1e-12);
-  EXPECT_THROW(partition_cells(keys, cost, 3, std::vector<double>{1, 1}), std::invalid_argument);
-  EXPECT_THROW(partition_cells(keys, cost, 3, std::vector<double>{1, 0, 1}), std::invalid_argument);
-  EXPECT_THROW(partition_cells(keys, cost, 3, std::vector<double>{1, NAN, 1}),
-               std::invalid_argument);
 }
 
 TEST(Partition, EdgeCases) {
