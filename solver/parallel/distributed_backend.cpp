@@ -583,6 +583,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     r.rebuilds = rebuilds_;
     r.contact_slack = slack_;
     r.imbalance = last_imbalance_;
+    r.imbalance_modelled = last_modelled_;
     r.imbalance_initial = imbalance_initial_;
     r.rebalance_log = log_;
     r.rebuild_log = rebuild_log_;
@@ -965,10 +966,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   }
 
   // Rebuilds when some vertex moved `slack` (contact band: the skin test compute_forces
-  // queued) or, every rebalance_every steps, when the measured imbalance exceeds the threshold
-  // and a new cut pays for its rebuild (recut_pays; a threshold of 0 re-cuts at every
-  // measurement, as the fluid's); the exchange start_halo began is finished first. True when it
-  // rebuilt.
+  // queued) or, every rebalance_every steps, when the measured imbalance and the partition
+  // model's exceed the threshold and a new cut pays for its rebuild (recut_pays; a threshold of
+  // 0 re-cuts at every measurement, as the fluid's); the exchange start_halo began is finished
+  // first. True when it rebuilt.
   bool maybe_rebuild(bool dynamic) {
     bool rebuild = false, rebalance = false;
     if (contact_) {
@@ -981,10 +982,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
     if (dynamic && steps_ % opt_.rebalance_every == 0) {
       const Window w = measure_window();
-      rebalance = np_ > 1 && w.imbalance > opt_.rebalance_threshold &&
-                  (opt_.rebalance_threshold == 0 ||
-                   recut_pays(w.imbalance / (1 + w.imbalance), w.busiest_step_s,
-                              opt_.rebalance_every, w.rebuild_s));
+      rebalance = np_ > 1 && recut_due(w.imbalance, w.modelled, opt_.rebalance_threshold,
+                                       w.busiest_step_s, opt_.rebalance_every, w.rebuild_s);
     }
     if (!rebuild && !rebalance) return false;
     // The exchange and the interior tets of the old layout are not used.
@@ -1047,34 +1046,44 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   double seconds(const char* phase) const { return seconds_of(timers_.seconds(), phase); }
 
   // A window's measurement: max / mean - 1 of the ranks' busy time, the busiest rank's busy
-  // seconds a step, and the largest last rebuild's seconds over the ranks.
+  // seconds a step, the largest last rebuild's seconds over the ranks, and max / mean - 1 of
+  // the ranks' cost in the partition's model (the items of the current cut at the fitted
+  // weights: what a new cut could even out).
   struct Window {
-    double imbalance = 0, busiest_step_s = 0, rebuild_s = 0;
+    double imbalance = 0, busiest_step_s = 0, rebuild_s = 0, modelled = 0;
   };
 
-  // Busy time of each rank since the last window: the imbalance, and the time per item that
-  // weights the cost of the next partition.
+  // Busy time of each rank since the last window: the imbalance, the time per item that
+  // weights the cost of the next partition, and the current cut's imbalance at those weights.
   Window measure_window() {
     const double contact = local_contact_seconds();
     const double te = seconds("elements") - contact, ti = seconds("integration");
     const double busy = te + ti + contact;
-    double w[7] = {busy - mark_[0],
+    double w[8] = {busy - mark_[0],
                    te - mark_[1],
                    ti - mark_[2],
                    contact - mark_[3],
                    static_cast<double>(L_.tets.size()),
                    static_cast<double>(L_.n_owned),
-                   static_cast<double>(n_contact_owned_)};
+                   static_cast<double>(n_contact_owned_),
+                   static_cast<double>(L_.n_home)};
     mark_[0] = busy, mark_[1] = te, mark_[2] = ti, mark_[3] = contact;
     double mx[2] = {w[0], rebuild_s_};
     MPI_Allreduce(MPI_IN_PLACE, mx, 2, MPI_DOUBLE, MPI_MAX, comm_);
-    allreduce_sum_same(comm_, w, 7);
+    const double home = w[7];
+    allreduce_sum_same(comm_, w, 8);
     const double mean = w[0] / np_;
     const double imb = mean > 0 ? mx[0] / mean - 1 : 0.0;
     const std::int64_t n = steps_ - window_start_;
     if (w[4] > 0 && w[1] > 0) w_.tet = w[1] / w[4];
     if (w[5] > 0 && w[2] > 0) w_.vertex = w[2] / w[5];
     if (w[6] > 0 && w[3] > 0) w_.contact = w[3] / w[6];
+    // The cut's cost of this rank's items (reassign's: a vertex, the tets it is the smallest
+    // vertex of, a contact vertex), its largest over the ranks, and the mean.
+    double cost = w_.vertex * L_.n_owned + w_.tet * home + w_.contact * n_contact_owned_;
+    MPI_Allreduce(MPI_IN_PLACE, &cost, 1, MPI_DOUBLE, MPI_MAX, comm_);
+    const double mean_cost = (w_.vertex * w[5] + w_.tet * w[7] + w_.contact * w[6]) / np_;
+    last_modelled_ = mean_cost > 0 ? cost / mean_cost - 1 : 0.0;
     if (windows_++ == 0) imbalance_initial_ = imb;
     if (pending_after_) {
       log_.back().imbalance_after = imb;
@@ -1082,7 +1091,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
     last_imbalance_ = imb;
     window_start_ = steps_;
-    return {imb, n > 0 ? mx[0] / static_cast<double>(n) : 0.0, mx[1]};
+    return {imb, n > 0 ? mx[0] / static_cast<double>(n) : 0.0, mx[1], last_modelled_};
   }
 
   // body_rank_ from owner_: a body per thread at a time.
@@ -1667,6 +1676,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   double mark_[4] = {0, 0, 0, 0};
   std::int64_t steps_ = 0, window_start_ = 0, windows_ = 0, rebuilds_ = 0, rebalances_ = 0;
   double last_imbalance_ = 0, imbalance_initial_ = 0, predicted_after_ = 0;
+  double last_modelled_ = 0;  // the last window's Window::modelled
   bool pending_after_ = false;
   std::vector<RebalanceEntry> log_;
   std::vector<RebuildEntry> rebuild_log_;

@@ -21,6 +21,7 @@ Json ParallelRecord::to_json() const {
   j["contact_slack"] = contact_slack;
   j["imbalance"] = imbalance;
   j["imbalance_initial"] = imbalance_initial;
+  j["imbalance_modelled"] = imbalance_modelled;
   j["migrated_bytes"] = migrated_bytes;
   j["halo_bytes_per_step"] = halo_bytes_per_step;
   j["fluid_halo_bytes_per_step"] = fluid_halo_bytes_per_step;

@@ -10,7 +10,11 @@
 //                        contact) of the last measurement window (rebalance_every steps): the
 //                        bodies' balancer's measure, without the fluid's passes (phases_by_rank
 //                        has every rank's; scaling/run.py's busy_imbalance counts them)
-//   imbalance_initial    the same over the first window, before any rebalancing
+//   imbalance_modelled   max / mean - 1 over ranks of the partition's cost of their items
+//                        (vertices, home tets, contact vertices at the weights fitted to the
+//                        last window's times): what a new cut could even out; the balancer
+//                        cuts again only when this and `imbalance` exceed its threshold
+//   imbalance_initial    the same as `imbalance` over the first window, before any rebalancing
 //   migrated_bytes       bytes sent between ranks by migrations (state, owners, history)
 //   halo_bytes_per_step  bytes sent by all ranks' halo exchanges per force evaluation
 //   fluid_halo_bytes_per_step   the SPH fluid's (sph/fluid_exchange.hpp, FluidTraffic): bytes
@@ -108,7 +112,7 @@ struct ParallelRecord {
   std::string curve = "hilbert";
   std::int64_t rebalances = 0, rebuilds = 0;
   double contact_slack = 0;
-  double imbalance = 0, imbalance_initial = 0;
+  double imbalance = 0, imbalance_initial = 0, imbalance_modelled = 0;
   std::int64_t migrated_bytes = 0;
   double halo_bytes_per_step = 0;
   double fluid_halo_bytes_per_step = 0;

@@ -38,4 +38,18 @@ inline bool recut_pays(double excess, double step_s, long every, double rebuild_
   return excess * step_s * static_cast<double>(every) > rebuild_s;
 }
 
+// Whether the bodies' balancer cuts again (docs/parallel.md item 5), from a window's measured
+// imbalance (max / mean - 1 of the ranks' busy seconds) and the partition model's (of the
+// ranks' items at the weights fitted to those seconds). A new cut evens out the modelled cost,
+// not the ranks' speeds or a window's noise, so both must exceed the threshold, and the smaller
+// is what the cut saves (recut_pays, `step_s` the busiest rank's step). A threshold of 0 cuts at
+// every measurement with any measured imbalance, as the tests need.
+inline bool recut_due(double measured, double modelled, double threshold, double step_s, long every,
+                      double rebuild_s) {
+  if (!(measured > threshold)) return false;
+  if (threshold == 0) return true;
+  const double gain = std::min(measured, modelled);
+  return gain > threshold && recut_pays(gain / (1 + gain), step_s, every, rebuild_s);
+}
+
 }  // namespace qdemsph
