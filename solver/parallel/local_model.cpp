@@ -58,6 +58,7 @@ ModelIndex index_model(const Model& g) {
       body_offsets(nb, g.n_tets(), "tets", [&](std::int64_t t) { return g.body[g.tets[t][0]]; });
   ix.contact_vertex.assign(nv, 0);
   ix.wall_vertex.assign(nv, 0);
+  ix.body_closed.assign(nb, 0);
   const ContactModel& c = g.contact;
   if (!c.enabled) return ix;
   const std::int64_t np = static_cast<std::int64_t>(c.prim_v.size());
@@ -87,6 +88,28 @@ ModelIndex index_model(const Model& g) {
       ix.tri_edges[s][q] = static_cast<std::int32_t>(
           std::lower_bound(c.edges.begin(), c.edges.end(), e) - c.edges.begin());
     }
+  // body_closed: every triangle named by a primitive of its body and no other, every edge a
+  // side of a triangle of its body.
+  std::vector<std::uint8_t> named(c.tri_v.size(), 0), sided(c.edges.size(), 0);
+  ix.body_closed.assign(nb, 1);
+  for (std::int64_t p = 0; p < np; ++p)
+    for (std::int64_t q = c.prim_tri_off[p]; q < c.prim_tri_off[p + 1]; ++q) {
+      const std::int32_t s = c.prim_tri[q];
+      named[s] = 1;
+      if (c.tri_body[s] != c.prim_body[p]) ix.body_closed[c.prim_body[p]] = 0;
+    }
+  for (std::size_t s = 0; s < c.tri_v.size(); ++s) {
+    if (!named[s]) ix.body_closed[c.tri_body[s]] = 0;
+    for (int q = 0; q < 3; ++q) {
+      const std::int32_t e = ix.tri_edges[s][q];
+      if (e >= static_cast<std::int64_t>(c.edges.size()) || g.body[c.edges[e][0]] != c.tri_body[s])
+        ix.body_closed[c.tri_body[s]] = 0;
+      else
+        sided[e] = 1;
+    }
+  }
+  for (std::size_t e = 0; e < c.edges.size(); ++e)
+    if (!sided[e]) ix.body_closed[g.body[c.edges[e][0]]] = 0;
   return ix;
 }
 
@@ -319,9 +342,11 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
   for_each(HostExec{}, static_cast<std::int64_t>(prims.size()),
            [&](std::int64_t j) { prims[j] = cand_prims[prims[j]]; });
   const auto npl = static_cast<std::int64_t>(prims.size());
-  // Their triangles and the triangles' edges, in global order (the candidates marked, then
-  // collected), and global -> local numbers (-1: not held) in the ids' kept arrays: the last
-  // build's entries are reset, then the candidates' written.
+  // Their triangles and the triangles' edges, in global order, and global -> local numbers (-1:
+  // not held) in the ids' kept arrays: the last build's entries are reset, then the held ones
+  // written. A closed body this rank owns whole (`whole`) holds all its triangles and edges;
+  // the other touched bodies' candidates are marked from their held primitives and triangles,
+  // then collected (`part`), and the two merged body by body.
   auto mark = [](std::int32_t& m) {
     std::atomic_ref<std::int32_t>(m).store(1, std::memory_order_relaxed);
   };
@@ -335,34 +360,68 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
     for_each(HostExec{}, static_cast<std::int64_t>(cand.size()),
              [&](std::int64_t k) { marks[cand[k]] = 0; });
   };
-  auto collect = [](std::vector<std::int32_t>& marks, const std::vector<std::int64_t>& cand,
-                    std::vector<std::int64_t>& out) {
+  auto collect = [](const std::vector<std::int32_t>& marks, const std::vector<std::int64_t>& cand) {
     const auto nc = static_cast<std::int64_t>(cand.size());
-    out = select_indices(HostExec{}, nc, [&](std::int64_t k) { return marks[cand[k]] != 0; });
-    for_each(HostExec{}, nc, [&](std::int64_t k) { marks[cand[k]] = -1; });
-    for_each(HostExec{}, static_cast<std::int64_t>(out.size()), [&](std::int64_t j) {
-      out[j] = cand[out[j]];
-      marks[out[j]] = static_cast<std::int32_t>(j);
+    std::vector<std::int64_t> out =
+        select_indices(HostExec{}, nc, [&](std::int64_t k) { return marks[cand[k]] != 0; });
+    for_each(HostExec{}, static_cast<std::int64_t>(out.size()),
+             [&](std::int64_t j) { out[j] = cand[out[j]]; });
+    return out;
+  };
+  const auto nb = static_cast<std::int64_t>(g.bodies.size());
+  std::vector<std::uint8_t> whole(nb, 0), some(nb, 0);
+  for (std::int64_t b = 0; b < nb; ++b) {
+    whole[b] = touched[b] && ix.body_closed[b] &&
+               b < static_cast<std::int64_t>(L.body_whole.size()) && L.body_whole[b] == kWholeHere;
+    some[b] = touched[b] && !whole[b];
+  }
+  auto merge = [&](const std::vector<std::int64_t>& off, const std::vector<std::int64_t>& part,
+                   std::vector<std::int32_t>& marks, std::vector<std::int64_t>& out) {
+    std::vector<std::int64_t> first(nb + 1, 0), from(nb, 0);
+    for (std::int64_t b = 0; b < nb; ++b) {
+      std::int64_t n = 0;
+      if (whole[b]) {
+        n = off[b + 1] - off[b];
+      } else if (some[b]) {
+        from[b] = std::lower_bound(part.begin(), part.end(), off[b]) - part.begin();
+        n = std::lower_bound(part.begin() + from[b], part.end(), off[b + 1]) - part.begin() -
+            from[b];
+      }
+      first[b + 1] = first[b] + n;
+    }
+    fit(first[nb], out);
+    for_each(HostExec{}, nb, [&](std::int64_t b) {
+      for (std::int64_t k = first[b]; k < first[b + 1]; ++k)
+        out[k] = whole[b] ? off[b] + (k - first[b]) : part[from[b] + (k - first[b])];
     });
+    for_each(HostExec{}, first[nb],
+             [&](std::int64_t j) { marks[out[j]] = static_cast<std::int32_t>(j); });
   };
   std::vector<std::int64_t>& tris = ids.triangle;
   std::vector<std::int32_t>& tri_l = ids.triangle_local;
-  const std::vector<std::int64_t> cand_tris = body_items(ix.body_tri_off, touched);
+  const std::vector<std::int64_t> cand_tris = body_items(ix.body_tri_off, some);
   clear(tri_l, static_cast<std::int64_t>(gc.tri_v.size()), tris, cand_tris);
   for_each(HostExec{}, npl, [&](std::int64_t j) {
+    if (whole[gc.prim_body[prims[j]]]) return;
     for (std::int64_t q = gc.prim_tri_off[prims[j]]; q < gc.prim_tri_off[prims[j] + 1]; ++q)
       mark(tri_l[gc.prim_tri[q]]);
   });
-  collect(tri_l, cand_tris, tris);
+  const std::vector<std::int64_t> part_tris = collect(tri_l, cand_tris);
+  for_each(HostExec{}, static_cast<std::int64_t>(cand_tris.size()),
+           [&](std::int64_t k) { tri_l[cand_tris[k]] = -1; });
+  merge(ix.body_tri_off, part_tris, tri_l, tris);
   const auto ntl = static_cast<std::int64_t>(tris.size());
   std::vector<std::int64_t>& edges = ids.edge;
   std::vector<std::int32_t>& edge_l = ids.edge_local;
-  const std::vector<std::int64_t> cand_edges = body_items(ix.body_edge_off, touched);
+  const std::vector<std::int64_t> cand_edges = body_items(ix.body_edge_off, some);
   clear(edge_l, static_cast<std::int64_t>(gc.edges.size()), edges, cand_edges);
-  for_each(HostExec{}, ntl, [&](std::int64_t j) {
-    for (int q = 0; q < 3; ++q) mark(edge_l[ix.tri_edges[tris[j]][q]]);
+  for_each(HostExec{}, static_cast<std::int64_t>(part_tris.size()), [&](std::int64_t j) {
+    for (int q = 0; q < 3; ++q) mark(edge_l[ix.tri_edges[part_tris[j]][q]]);
   });
-  collect(edge_l, cand_edges, edges);
+  const std::vector<std::int64_t> part_edges = collect(edge_l, cand_edges);
+  for_each(HostExec{}, static_cast<std::int64_t>(cand_edges.size()),
+           [&](std::int64_t k) { edge_l[cand_edges[k]] = -1; });
+  merge(ix.body_edge_off, part_edges, edge_l, edges);
   const auto nel = static_cast<std::int64_t>(edges.size());
   // The local lists, written in parallel (CSR offsets first).
   auto lv = [&](std::int64_t gid) {  // local index; a missing vertex is recorded

@@ -43,6 +43,10 @@ struct ModelIndex {
   // std::logic_error for a model that does not group them by body in body order (build_model
   // does): a rank's layout searches only the bodies it touches (body_items).
   std::vector<std::int64_t> body_tet_off, body_prim_off, body_tri_off, body_edge_off;
+  // Per body: its primitives name only its triangles, each of its triangles is named by one of
+  // them, and its edges are those of its triangles. A part holding every vertex of such a body
+  // holds all its primitives, triangles and edges, taken without a test.
+  std::vector<std::uint8_t> body_closed;
   std::vector<std::uint8_t> contact_vertex;  // a vertex of some contact primitive
   std::vector<std::uint8_t> wall_vertex;     // tested against walls
   double prim_radius = 0;  // largest primitive radius (centroid to vertex) in the reference

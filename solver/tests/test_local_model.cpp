@@ -403,6 +403,38 @@ TEST(LocalModel, APartAfterAnotherBodysPartHoldsOnlyItsBodysFeatures) {
   EXPECT_THROW(index_model(unordered), std::logic_error);
 }
 
+// A body this rank owns whole, closed (ModelIndex::body_closed: the boxes' are), gives all its
+// primitives, triangles and edges without a test: the part equals the one built with every
+// body's items tested (no body_whole), with the other body's ghosts in the band, into fresh
+// storage and into the other part's.
+TEST(LocalModel, AWholeBodyHoldsAllItsFeaturesWithoutATest) {
+  auto pb = make_problem(kTwoBodies);
+  const Model& g = pb.model;
+  const ModelIndex ix = index_model(g);
+  EXPECT_EQ(ix.body_closed, (std::vector<std::uint8_t>{1, 1}));
+  for (int side : {0, 1}) {
+    const LocalLayout L = layout_of(g, ix, side, 0.3025, 0.05);
+    ASSERT_EQ(L.body_whole[side], kWholeHere);
+    ASSERT_GT(L.n_free, L.n_owned);  // the other body's ghosts
+    LocalLayout tested = L;
+    tested.body_whole.clear();
+    const LocalModel fast = build_local_model(g, ix, L, values(L, g.x), values(L, g.v));
+    const LocalModel slow = build_local_model(g, ix, tested, values(L, g.x), values(L, g.v));
+    expect_same_parts(fast, slow);
+    const LocalLayout other = layout_of(g, ix, 1 - side, 0.3025, 0.05);
+    LocalModel reused;
+    build_local_model(g, ix, other, values(other, g.x), values(other, g.v), reused);
+    build_local_model(g, ix, L, values(L, g.x), values(L, g.v), reused);
+    expect_same_parts(reused, slow);
+    EXPECT_GT(slow.ids.triangle.size(), static_cast<std::size_t>(ix.body_tri_off[1]) / 2);
+  }
+  // A primitive that names another body's triangle opens its body.
+  Model open = g;
+  open.contact.prim_tri[open.contact.prim_tri_off[0]] =
+      static_cast<std::int32_t>(ix.body_tri_off[1]);
+  EXPECT_EQ(index_model(open).body_closed, (std::vector<std::uint8_t>{0, 1}));
+}
+
 // A part's corner lists (taken from the global index, not sorted) hold each owned vertex's
 // corners in the one-rank order: by corner, then tet global id.
 TEST(LocalModel, CornerListsAreInTheOneRankOrder) {
