@@ -14,7 +14,8 @@ from harness import must
 from harness.qdemsph import mpirun_command
 
 HERE = Path(__file__).resolve().parent
-PARALLEL_KEYS = {"ranks", "curve", "rebalances", "rebuilds", "contact_slack", "imbalance", "imbalance_initial", "migrated_bytes",
+PARALLEL_KEYS = {"ranks", "curve", "rebalances", "rebuilds", "contact_slack", "imbalance", "imbalance_initial",
+                 "imbalance_modelled", "migrated_bytes",
                  "halo_bytes_per_step", "fluid_halo_bytes_per_step", "fluid_migrated_bytes", "fluid_rebuilds", "fluid_recuts", "fluid_skin",
                  "setup_s",
                  "owned_vertices",
@@ -92,6 +93,7 @@ def test_same_as_one_rank(ranks, curve, qdemsph, checks, case_out):
                  unit="B")
     checks.info(m + "migrated_bytes", par.get("migrated_bytes", 0), unit="B")
     checks.info(m + "imbalance", par.get("imbalance", np.nan))
+    checks.info(m + "imbalance_modelled", par.get("imbalance_modelled", np.nan))
     checks.info(m + "wall", many.solver_wall_s, unit="s", wall_s=many.solver_wall_s)
     checks.require()
 
