@@ -101,6 +101,11 @@ struct TetRecord {
 // defaults (before anything is measured) say a tet costs about four vertices.
 struct Weights {
   double vertex = 0.25, tet = 1.0, contact = 1.0;
+  // The partition's cost of items: vertices, the tets they are the smallest vertex of, contact
+  // vertices.
+  double cost(double vertices, double home_tets, double contact_vertices) const {
+    return vertex * vertices + tet * home_tets + contact * contact_vertices;
+  }
 };
 
 class DistributedImpl final : public DistributedBackend, private SolidSync {
@@ -1078,11 +1083,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     if (w[4] > 0 && w[1] > 0) w_.tet = w[1] / w[4];
     if (w[5] > 0 && w[2] > 0) w_.vertex = w[2] / w[5];
     if (w[6] > 0 && w[3] > 0) w_.contact = w[3] / w[6];
-    // The cut's cost of this rank's items (reassign's: a vertex, the tets it is the smallest
-    // vertex of, a contact vertex), its largest over the ranks, and the mean.
-    double cost = w_.vertex * L_.n_owned + w_.tet * home + w_.contact * n_contact_owned_;
+    // The cut's cost of this rank's items (reassign's), its largest over the ranks, the mean.
+    double cost = w_.cost(L_.n_owned, home, n_contact_owned_);
     MPI_Allreduce(MPI_IN_PLACE, &cost, 1, MPI_DOUBLE, MPI_MAX, comm_);
-    const double mean_cost = (w_.vertex * w[5] + w_.tet * w[7] + w_.contact * w[6]) / np_;
+    const double mean_cost = w_.cost(w[5], w[7], w[6]) / np_;
     last_modelled_ = mean_cost > 0 ? cost / mean_cost - 1 : 0.0;
     if (windows_++ == 0) imbalance_initial_ = imb;
     if (pending_after_) {
@@ -1120,7 +1124,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       std::vector<double> cost(nsv);
       for (std::int64_t k = 0; k < nsv; ++k) {
         const std::int64_t gv = s.vertex[k];
-        cost[k] = w_.vertex + w_.tet * ix_.tets_at[gv] + (ix_.contact_vertex[gv] ? w_.contact : 0);
+        cost[k] = w_.cost(1, ix_.tets_at[gv], ix_.contact_vertex[gv]);
       }
       dec_ = balance(comm_, s.x, cost, curve_, opt_.max_cell_cost);
       predicted_after_ = dec_.predicted_imbalance;
@@ -1346,7 +1350,11 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     std::optional<PhaseTimers::Scope> part;
     part.emplace(timers_, "migration.layout");
     std::optional<PhaseTimers::Scope> sub;  // the layout's and the upload's parts
-    sub.emplace(timers_, "migration.layout.tets");
+    auto phase = [&](const char* name) {
+      sub.reset();
+      if (name) sub.emplace(timers_, name);
+    };
+    phase("migration.layout.tets");
     const Model& g = *g_;
     LocalLayout L;
     L.vertices = s.vertex;
@@ -1365,8 +1373,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       L.body_whole[b] = body_rank_[b] < 0      ? kSplit
                         : body_rank_[b] == me_ ? kWholeHere
                                                : kWholeElsewhere;
-    sub.reset();
-    sub.emplace(timers_, "migration.layout.band");
+    phase("migration.layout.band");
 
     // Contact band: the cells holding this rank's owned contact vertices, published to all;
     // each vertex's cell and the distinct cells in key order found on the threads (a key per
@@ -1409,8 +1416,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       r.erase(std::unique(r.begin(), r.end()), r.end());
     });
 
-    sub.reset();
-    sub.emplace(timers_, "migration.layout.halo");
+    phase("migration.layout.halo");
     // Halo: an owned vertex goes to the owners of its tets' other vertices (they hold those
     // tets) and, for contact vertices, to the ranks with owned contact vertices in the band.
     // Each vertex's list is sorted, without this rank and repeats (what HaloPlan keeps),
@@ -1499,10 +1505,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
         same_owners ||
         (rebuilds_ > 0 && L.n_owned == L_.n_owned && L.tets == L_.tets &&
          std::equal(L.vertices.begin(), L.vertices.begin() + L.n_owned, L_.vertices.begin()));
-    sub.reset();
-    sub.emplace(timers_, "migration.layout.model");
+    phase("migration.layout.model");
     build_local_model(g, ix_, L, st.x, st.v, lm_, true, same_tets);
-    sub.reset();
+    phase(nullptr);
     part.reset();
     part.emplace(timers_, "migration.upload");
 
@@ -1513,13 +1518,12 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       overlap_acc_ = std::max(overlap_acc_, c["max_overlap_ever"]);
       rebuilds_acc_ += c["pair_rebuilds"];
     }
-    sub.emplace(timers_, "migration.upload.model");
+    phase("migration.upload.model");
     if (same_tets)
       local_->upload_same_tets(lm_.model);
     else
       local_->upload(lm_.model);
-    sub.reset();
-    sub.emplace(timers_, "migration.upload.state");
+    phase("migration.upload.state");
     local_->use_preload(preload_);
     st.x0.clear();
     st.f0.clear();
@@ -1580,8 +1584,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       });
     }
     local_->load_state(st);
-    sub.reset();
-    sub.emplace(timers_, "migration.upload.routes");
+    phase("migration.upload.routes");
     if (first_halo) halo_->engine().use_device(local_->space() == Space::Cuda, 6 * sizeof(double));
     local_->set_halo(halo_->engine().send_index(), L.n_owned, halo_->n_ghost());
     if (contact_) local_->set_share_routes(share_routes(L, lm_.ids));

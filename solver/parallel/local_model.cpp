@@ -360,10 +360,12 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
     for_each(HostExec{}, static_cast<std::int64_t>(cand.size()),
              [&](std::int64_t k) { marks[cand[k]] = 0; });
   };
-  auto collect = [](const std::vector<std::int32_t>& marks, const std::vector<std::int64_t>& cand) {
+  // The marked candidates, in order; every candidate's mark is reset.
+  auto collect = [](std::vector<std::int32_t>& marks, const std::vector<std::int64_t>& cand) {
     const auto nc = static_cast<std::int64_t>(cand.size());
     std::vector<std::int64_t> out =
         select_indices(HostExec{}, nc, [&](std::int64_t k) { return marks[cand[k]] != 0; });
+    for_each(HostExec{}, nc, [&](std::int64_t k) { marks[cand[k]] = -1; });
     for_each(HostExec{}, static_cast<std::int64_t>(out.size()),
              [&](std::int64_t j) { out[j] = cand[out[j]]; });
     return out;
@@ -375,26 +377,14 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
                b < static_cast<std::int64_t>(L.body_whole.size()) && L.body_whole[b] == kWholeHere;
     some[b] = touched[b] && !whole[b];
   }
+  // The held items: a whole body's range and the others' collected ones (disjoint, both in
+  // global order), numbered in `marks`.
   auto merge = [&](const std::vector<std::int64_t>& off, const std::vector<std::int64_t>& part,
                    std::vector<std::int32_t>& marks, std::vector<std::int64_t>& out) {
-    std::vector<std::int64_t> first(nb + 1, 0), from(nb, 0);
-    for (std::int64_t b = 0; b < nb; ++b) {
-      std::int64_t n = 0;
-      if (whole[b]) {
-        n = off[b + 1] - off[b];
-      } else if (some[b]) {
-        from[b] = std::lower_bound(part.begin(), part.end(), off[b]) - part.begin();
-        n = std::lower_bound(part.begin() + from[b], part.end(), off[b + 1]) - part.begin() -
-            from[b];
-      }
-      first[b + 1] = first[b] + n;
-    }
-    fit(first[nb], out);
-    for_each(HostExec{}, nb, [&](std::int64_t b) {
-      for (std::int64_t k = first[b]; k < first[b + 1]; ++k)
-        out[k] = whole[b] ? off[b] + (k - first[b]) : part[from[b] + (k - first[b])];
-    });
-    for_each(HostExec{}, first[nb],
+    const std::vector<std::int64_t> all = body_items(off, whole);
+    fit(static_cast<std::int64_t>(all.size() + part.size()), out);
+    std::merge(all.begin(), all.end(), part.begin(), part.end(), out.begin());
+    for_each(HostExec{}, static_cast<std::int64_t>(out.size()),
              [&](std::int64_t j) { marks[out[j]] = static_cast<std::int32_t>(j); });
   };
   std::vector<std::int64_t>& tris = ids.triangle;
@@ -407,8 +397,6 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
       mark(tri_l[gc.prim_tri[q]]);
   });
   const std::vector<std::int64_t> part_tris = collect(tri_l, cand_tris);
-  for_each(HostExec{}, static_cast<std::int64_t>(cand_tris.size()),
-           [&](std::int64_t k) { tri_l[cand_tris[k]] = -1; });
   merge(ix.body_tri_off, part_tris, tri_l, tris);
   const auto ntl = static_cast<std::int64_t>(tris.size());
   std::vector<std::int64_t>& edges = ids.edge;
@@ -419,8 +407,6 @@ void build_local_model(const Model& g, const ModelIndex& ix, const LocalLayout& 
     for (int q = 0; q < 3; ++q) mark(edge_l[ix.tri_edges[part_tris[j]][q]]);
   });
   const std::vector<std::int64_t> part_edges = collect(edge_l, cand_edges);
-  for_each(HostExec{}, static_cast<std::int64_t>(cand_edges.size()),
-           [&](std::int64_t k) { edge_l[cand_edges[k]] = -1; });
   merge(ix.body_edge_off, part_edges, edge_l, edges);
   const auto nel = static_cast<std::int64_t>(edges.size());
   // The local lists, written in parallel (CSR offsets first).
