@@ -106,6 +106,42 @@ void assign_on_threads(Buffer<T>& b, const std::vector<T>& h, StagingBytes& stag
                 [&](T* out) { for_each(HostExec{}, n, [&](std::int64_t i) { out[i] = h[i]; }); });
 }
 
+// Entries [begin, end) of b (within its size) <- value(i), computed on the host's threads; the
+// others stay. A device buffer's go through `stage` (one copy), as write_on_host's.
+template <class T, class Value>
+void write_range_on_host(Buffer<T>& b, std::int64_t begin, std::int64_t end, StagingBytes& stage,
+                         Value value) {
+  const std::int64_t n = end - begin;
+  if (n <= 0) return;
+  T* out = b.view().p + begin;
+  if (b.space() != Space::Host) {
+    stage.resize(sizeof(T) * n);
+    out = reinterpret_cast<T*>(stage.data());
+  }
+  for_each(HostExec{}, n, [&](std::int64_t i) { out[i] = value(begin + i); });
+  if (b.space() != Space::Host)
+    space_copy(b.view().p + begin, b.space(), out, Space::Host, sizeof(T) * n);
+}
+
+// b <- h where only entries from `first` on are copied: the first ones stand (a distributed
+// rank's owned vertices, when only its ghosts changed). first = 0: assign_on_threads.
+template <class T>
+void assign_tail_on_threads(Buffer<T>& b, const std::vector<T>& h, std::int64_t first,
+                            StagingBytes& stage) {
+  if (first == 0) return assign_on_threads(b, h, stage);
+  const auto n = static_cast<std::int64_t>(h.size());
+  b.resize_keep(n);
+  write_range_on_host(b, first, n, stage, [&](std::int64_t i) { return h[i]; });
+}
+inline void assign_tail_on_threads(Vec3Buffer& b, const std::vector<Vec3>& h, std::int64_t first,
+                                   StagingBytes& stage) {
+  if (first == 0) return b.assign(h);
+  const auto n = static_cast<std::int64_t>(h.size());
+  b.resize_keep(n);
+  for (int a = 0; a < 3; ++a)
+    write_range_on_host(b.component(a), first, n, stage, [&](std::int64_t i) { return h[i][a]; });
+}
+
 }  // namespace qdemsph
 
 namespace qdemsph {

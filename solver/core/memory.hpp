@@ -181,6 +181,17 @@ class Buffer {
     }
     n_ = n;
   }
+  // Size n, the first min(n, size()) entries kept (copied into the new allocation when n
+  // outgrows the capacity).
+  void resize_keep(std::int64_t n) {
+    if (n > cap_) {
+      Buffer grown(space_);
+      grown.resize_for_overwrite(n);
+      if (n_ > 0) space_copy(grown.p_, space_, p_, space_, sizeof(T) * n_);
+      swap(grown);
+    }
+    n_ = n;
+  }
   void assign(const T* host, std::int64_t n) {
     resize_for_overwrite(n);
     if (n_ > 0) space_copy(p_, space_, host, Space::Host, sizeof(T) * n_);
@@ -196,8 +207,9 @@ class Buffer {
     if (n > 0) space_copy(h.data(), Space::Host, p_, space_, sizeof(T) * n);
     return h;
   }
-  void zero() {
-    if (n_ > 0) space_zero(space_, p_, sizeof(T) * n_);
+  void zero() { zero_from(0); }
+  void zero_from(std::int64_t first) {
+    if (n_ > first) space_zero(space_, p_ + first, sizeof(T) * (n_ - first));
   }
   View<T> view() { return {p_, n_}; }
   View<const T> view() const { return {p_, n_}; }
@@ -241,6 +253,11 @@ class Vec3Buffer {
     x_.resize(n);
     y_.resize(n);
     z_.resize(n);
+  }
+  void resize_keep(std::int64_t n) {
+    x_.resize_keep(n);
+    y_.resize_keep(n);
+    z_.resize_keep(n);
   }
   void assign(const std::vector<Vec3>& h);
   std::vector<Vec3> to_host() const { return to_host(size()); }

@@ -172,10 +172,15 @@ class Backend {
     bool forces = false, relaxation = false;
   };
   virtual BackendState save_owned(const OwnedPart& part) = 0;
-  // upload, for a model with the last upload's tets and free vertices in the same order (a
-  // distributed rank's ghosts rebuilt, its owned part the same): the tets' reference shapes,
-  // volumes and materials and the free vertices' corner lists stay as they are.
-  virtual void upload_same_tets(const Model& model) = 0;
+  // upload, for a distributed rank's ghosts rebuilt with its owned part the same: `model` has
+  // the last upload's tets and free (owned) vertices in the same order, its first `kept_tets`
+  // tets on the same vertex numbers. What did not change stays as it is: the tets' reference
+  // data, dissipation and corner lists, the owned vertices' model data and state (x, v, diss_v).
+  // The other vertices (ghosts, fixed bodies') take the model's x and v and no dissipation, f is
+  // zero. A load_state may follow, or load_history (the owned state as it was).
+  virtual void upload_same_tets(const Model& model, std::int64_t kept_tets) = 0;
+  // The contact history alone, as load_state takes it.
+  virtual void load_history(const ContactState& history) = 0;
   // Enables the fluid coupling force fc (zero until the fluid writes it); views stay valid
   // until the next upload.
   virtual SolidViews solid_views();

@@ -34,8 +34,13 @@ class QdemBackend final : public Backend {
   explicit QdemBackend(std::string name) : name_(std::move(name)) {}
   std::string name() const override { return name_; }
 
-  void upload(const Model& m) override { upload_model(m, false); }
-  void upload_same_tets(const Model& m) override { upload_model(m, true); }
+  void upload(const Model& m) override { upload_model(m, -1); }
+  void upload_same_tets(const Model& m, std::int64_t kept_tets) override {
+    upload_model(m, kept_tets);
+  }
+  void load_history(const ContactState& history) override {
+    if (contact_) contact_->load_state(history);
+  }
 
   // Vertex -> (corner k, tet t) lists of the gathered vertices [0, nfv), entries k * nt + t,
   // ordered by (k, global tet id): on one rank that is increasing order; a rank of a distributed
@@ -553,10 +558,14 @@ class QdemBackend final : public Backend {
   }
 
  private:
-  // same_tets: the tets' reference data and the corner lists on the device stand (their
-  // shapes, volumes and materials; the owned vertices' lists of corners).
-  void upload_model(const Model& m, bool same_tets) {
-    if (same_tets && (m.n_tets() != nt_ || m.n_free_vertices != nfv_))
+  // kept_tets < 0: a model of its own. Else (upload_same_tets) the last upload's tets and owned
+  // vertices in the same order, its first kept_tets tets on the same vertex numbers: of the
+  // vertex arrays only those from the first ghost on are written (the owned vertices' model
+  // data and state, x, v and diss_v, stand), of the tets' vertex numbers those from kept_tets on;
+  // the tets' reference data, dissipation and corner lists stand.
+  void upload_model(const Model& m, std::int64_t kept_tets) {
+    const bool same_tets = kept_tets >= 0;
+    if (same_tets && (m.n_tets() != nt_ || m.n_free_vertices != nfv_ || kept_tets > nt_))
       throw std::logic_error("upload_same_tets: the model has other tets or free vertices");
     nv_ = m.n_vertices();
     nt_ = m.n_tets();
@@ -564,28 +573,31 @@ class QdemBackend final : public Backend {
     nft_ = m.n_free_tets;
     nct_ = m.n_counted_tets < 0 ? nft_ : m.n_counted_tets;
     gravity_ = m.gravity;
-    X_.assign(m.X);
-    x_.assign(m.x);
-    v_.assign(m.v);
+    const std::int64_t nv = nv_, nt = nt_, v0 = same_tets ? nfv_ : 0;  // first vertex written
+    for (auto [b, h] :
+         {std::pair{&X_, &m.X}, {&x_, &m.x}, {&v_, &m.v}, {&fext_, &m.fext}, {&fpre_, &m.fpre}})
+      assign_tail_on_threads(*b, *h, v0, stage_);
     f_.resize(nv_);
     fc_.resize(0);
-    fext_.assign(m.fext);
-    fpre_.assign(m.fpre);
-    assign_on_threads(mass_, m.mass, stage_);
-    assign_on_threads(inv_mass_, m.inv_mass, stage_);
-    assign_on_threads(relax_inv_mass_, m.relax_inv_mass, stage_);
-    const std::int64_t nv = nv_, nt = nt_;
-    write_on_host(held_, nv, stage_, [&](std::uint8_t* held) {
-      for_each(HostExec{}, nv, [&](std::int64_t i) { held[i] = held_components(m.flags[i]); });
-    });
+    for (auto [b, h] : {std::pair{&mass_, &m.mass},
+                        {&inv_mass_, &m.inv_mass},
+                        {&relax_inv_mass_, &m.relax_inv_mass}})
+      assign_tail_on_threads(*b, *h, v0, stage_);
+    auto fit = [&](auto& b, std::int64_t n) {  // the kept prefix, or all written next
+      same_tets ? b.resize_keep(n) : b.resize_for_overwrite(n);
+    };
+    fit(held_, nv);
+    write_range_on_host(held_, v0, nv, stage_,
+                        [&](std::int64_t i) { return held_components(m.flags[i]); });
     x0_.resize(nv_);  // relaxation start state (mark_relax_start)
     f0_.resize(nv_);
-    diss_v_.resize(nv_);
-    write_on_host(tv_, 4 * nt, stage_, [&](std::int32_t* tv) {
-      for_each(HostExec{}, nt, [&](std::int64_t t) {
-        for (int k = 0; k < 4; ++k) tv[k * nt + t] = m.tets[t][k];
-      });
-    });
+    fit(diss_v_, nv);
+    diss_v_.zero_from(v0);
+    fit(tv_, 4 * nt);
+    const std::int64_t t0 = same_tets ? kept_tets : 0;  // first tet written
+    for (int k = 0; k < 4; ++k)
+      write_range_on_host(tv_, k * nt + t0, (k + 1) * nt, stage_,
+                          [&](std::int64_t e) { return m.tets[e - k * nt][k]; });
     mats_.assign(m.materials);
     if (!same_tets) {
       write_on_host(dxi_, 9 * nt, stage_, [&](double* dxi) {

@@ -467,7 +467,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   void queue_max_moved() override { unsupported("queue_max_moved"); }
   double max_moved() override { unsupported("max_moved"); }
   BackendState save_owned(const OwnedPart&) override { unsupported("save_owned"); }
-  void upload_same_tets(const Model&) override { unsupported("upload_same_tets"); }
+  void upload_same_tets(const Model&, std::int64_t) override { unsupported("upload_same_tets"); }
+  void load_history(const ContactState&) override { unsupported("load_history"); }
 
   // ---- fluid coupling (sph/solid_coupling.hpp) ---------------------------------------------
   // The coupling reads and writes whole-model arrays by global vertex id, the same on every
@@ -1341,6 +1342,39 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     L.n_home = held.start[kHalo];
   }
 
+  // The relaxation start state of the owned vertices and each held tet's dissipation from the
+  // slice `s` into `st`, for the layout L (nv vertices). A tet's slot in the slice is found by
+  // gid in tet_slot_ (its entries of tets the slice lacks are stale, so a hit is checked).
+  void state_from_slice(const StateSlice& s, const LocalLayout& L, BackendState& st) {
+    const std::int64_t nv = static_cast<std::int64_t>(L.vertices.size()), no = L.n_owned;
+    st.x0.clear();
+    st.f0.clear();
+    if (!s.x0.empty()) {
+      resize_for_overwrite(st.x0, nv);
+      resize_for_overwrite(st.f0, nv);
+      for_each(HostExec{}, nv, [&](std::int64_t i) {
+        st.x0[i] = i < no ? s.x0[i] : Vec3{};
+        st.f0[i] = i < no ? s.f0[i] : Vec3{};
+      });
+    }
+    const auto nst = static_cast<std::int64_t>(s.tet.size());
+    tet_slot_.resize(g_->n_free_tets);
+    for_each(HostExec{}, nst,
+             [&](std::int64_t k) { tet_slot_[s.tet[k]] = static_cast<std::int32_t>(k); });
+    resize_for_overwrite(st.diss_t, L.tets.size());
+    std::atomic<std::int64_t> missing{-1};  // a held tet whose state did not arrive
+    for_each(HostExec{}, static_cast<std::int64_t>(L.tets.size()), [&](std::int64_t j) {
+      const std::int64_t k = tet_slot_[L.tets[j]];
+      if (k < nst && s.tet[k] == L.tets[j])
+        st.diss_t[j] = s.diss_t[k];
+      else
+        missing.store(L.tets[j], std::memory_order_relaxed);
+    });
+    if (missing >= 0)
+      throw std::logic_error("distributed install: no state arrived for tet " +
+                             std::to_string(missing));
+  }
+
   // Builds the rank's part from its owned state (vertices in gid order, the state of every
   // tet it will hold in any order, its contact history) and uploads it; the backend's and the
   // halo plan's arrays take room from their first allocation (BufferRoom).
@@ -1476,20 +1510,33 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       L.vertices.insert(L.vertices.end(), fixed.begin(), fixed.end());
     }
 
+    // The same owned vertices and held tets as the last layout (a rebuild of the ghosts that
+    // moved no vertex): the tets' reference data stay in the model and on the device. When
+    // `s` is the rank's own export (same_owners) and not relaxing, the owned vertices' state
+    // and the tets' dissipation stay on the device too (keep_owned).
+    const bool same_tets =
+        same_owners ||
+        (rebuilds_ > 0 && L.n_owned == L_.n_owned && L.tets == L_.tets &&
+         std::equal(L.vertices.begin(), L.vertices.begin() + L.n_owned, L_.vertices.begin()));
+    const bool keep_owned = same_owners && s.x0.empty();
     // The state the backend gets (kept: a rebuild writes it in place, on the threads), with
     // the positions and velocities the model is built from: owned from the slice, ghosts from
     // their owners, fixed bodies' from the model.
     const std::int64_t nv = static_cast<std::int64_t>(L.vertices.size());
     const std::int64_t no = L.n_owned, nf = L.n_free, nsf = static_cast<std::int64_t>(s.f.size());
     BackendState& st = installed_;
-    for (auto* a : {&st.x, &st.v, &st.f}) resize_for_overwrite(*a, nv);
-    resize_for_overwrite(st.diss_v, nv);
+    for (auto* a : {&st.x, &st.v}) resize_for_overwrite(*a, nv);
+    if (!keep_owned) {
+      resize_for_overwrite(st.f, nv);
+      resize_for_overwrite(st.diss_v, nv);
+    }
     for_each(HostExec{}, nv, [&](std::int64_t i) {
       const bool fixed = i >= nf;
       if (i < no || fixed) {
         st.x[i] = fixed ? g.x[L.vertices[i]] : s.x[i];
         st.v[i] = fixed ? g.v[L.vertices[i]] : s.v[i];
       }
+      if (keep_owned) return;
       // A rebuild's slice has no forces: compute_forces evaluates them next.
       st.f[i] = i < nsf ? s.f[i] : Vec3{};
       st.diss_v[i] = i < no ? s.diss_v[i] : 0.0;
@@ -1499,12 +1546,6 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       halo_->gather_begin(f);
       halo_->gather_finish(f);
     }
-    // The same owned vertices and held tets as the last layout (a rebuild of the ghosts that
-    // moved no vertex): the tets' reference data stay in the model and on the device.
-    const bool same_tets =
-        same_owners ||
-        (rebuilds_ > 0 && L.n_owned == L_.n_owned && L.tets == L_.tets &&
-         std::equal(L.vertices.begin(), L.vertices.begin() + L.n_owned, L_.vertices.begin()));
     phase("migration.layout.model");
     build_local_model(g, ix_, L, st.x, st.v, lm_, true, same_tets);
     phase(nullptr);
@@ -1520,39 +1561,12 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     }
     phase("migration.upload.model");
     if (same_tets)
-      local_->upload_same_tets(lm_.model);
+      local_->upload_same_tets(lm_.model, L.n_interior);
     else
       local_->upload(lm_.model);
     phase("migration.upload.state");
     local_->use_preload(preload_);
-    st.x0.clear();
-    st.f0.clear();
-    if (!s.x0.empty()) {
-      resize_for_overwrite(st.x0, nv);
-      resize_for_overwrite(st.f0, nv);
-      for_each(HostExec{}, nv, [&](std::int64_t i) {
-        st.x0[i] = i < no ? s.x0[i] : Vec3{};
-        st.f0[i] = i < no ? s.f0[i] : Vec3{};
-      });
-    }
-    // Each held tet's dissipation from its slot in the slice, found by gid in tet_slot_ (its
-    // entries of tets the slice lacks are stale, so a hit is checked).
-    const auto nst = static_cast<std::int64_t>(s.tet.size());
-    tet_slot_.resize(g.n_free_tets);
-    for_each(HostExec{}, nst,
-             [&](std::int64_t k) { tet_slot_[s.tet[k]] = static_cast<std::int32_t>(k); });
-    resize_for_overwrite(st.diss_t, L.tets.size());
-    std::atomic<std::int64_t> missing{-1};  // a held tet whose state did not arrive
-    for_each(HostExec{}, static_cast<std::int64_t>(L.tets.size()), [&](std::int64_t j) {
-      const std::int64_t k = tet_slot_[L.tets[j]];
-      if (k < nst && s.tet[k] == L.tets[j])
-        st.diss_t[j] = s.diss_t[k];
-      else
-        missing.store(L.tets[j], std::memory_order_relaxed);
-    });
-    if (missing >= 0)
-      throw std::logic_error("distributed install: no state arrived for tet " +
-                             std::to_string(missing));
+    if (!keep_owned) state_from_slice(s, L, st);
     // Contact history in this rank's feature ids and vertex indices, sorted by key (no
     // pair-list reference: the list is built for this layout at the next step).
     if (contact_) {
@@ -1583,7 +1597,10 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
           if (sc.v[e][q] >= 0) c.v[j][q] = lm_.ids.local_vertex(sc.v[e][q]);
       });
     }
-    local_->load_state(st);
+    if (!keep_owned)
+      local_->load_state(st);
+    else if (contact_)
+      local_->load_history(*st.contact);
     phase("migration.upload.routes");
     if (first_halo) halo_->engine().use_device(local_->space() == Space::Cuda, 6 * sizeof(double));
     local_->set_halo(halo_->engine().send_index(), L.n_owned, halo_->n_ghost());

@@ -270,13 +270,15 @@ TEST_P(TwoParts, OnTheGpuGiveTheWholeModelsForcesBitForBit) {
   two_parts_give_the_whole_models_forces("cuda", GetParam().first, GetParam().second);
 }
 
+// Two arrays, byte for byte.
+template <class T>
+bool same(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() &&
+         (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
 // Every array of two parts' models and ids, byte for byte.
 void expect_same_parts(const LocalModel& reused, const LocalModel& fresh) {
-  auto same = [](const auto& a, const auto& b) {
-    using T = typename std::decay_t<decltype(a)>::value_type;
-    return a.size() == b.size() &&
-           (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-  };
   const Model &a = reused.model, &b = fresh.model;
   EXPECT_TRUE(same(a.X, b.X) && same(a.x, b.x) && same(a.v, b.v) && same(a.fext, b.fext) &&
               same(a.fpre, b.fpre) && same(a.mass, b.mass) && same(a.inv_mass, b.inv_mass) &&
@@ -357,6 +359,81 @@ TEST(LocalModel, AGhostOnlyRebuildIntoTheLastPartEqualsAFreshBuild) {
         build_local_model(g, ix, *second, values(*second, moved), values(*second, g.v));
     expect_same_parts(reused, fresh);
   }
+}
+
+// A rank's ghosts rebuilt with its owned part the same (the distributed install of its own
+// export): upload_same_tets of the new part, with the contact history alone loaded after it,
+// steps as a fresh upload of that part with the whole state loaded (owned x, v and dissipation
+// as the backend had them, the ghosts' x and v from the part, their dissipation zero, every
+// tet's dissipation kept), bit for bit, whether the ghosts grow (their numbers and the
+// boundary tets' vertex numbers change) or shrink.
+void ghost_upload_keeps_the_owned_state(const char* backend) {
+  auto pb = make_problem(kScene);
+  const Model& g = pb.model;
+  const ModelIndex ix = index_model(g);
+  const LocalLayout narrow = layout_of(g, ix, 0, 0.3), wide = layout_of(g, ix, 0, 0.3, 0.25);
+  ASSERT_EQ(narrow.tets, wide.tets);
+  ASSERT_LT(narrow.n_interior, narrow.n_home);
+  std::vector<Vec3> moved = g.x;
+  for (auto& p : moved) p += Vec3{0.001, -0.002, 0.003};
+  const double dt = 1e-4;
+  // The ghosts' shares go to a rank 1 (this test exchanges none).
+  auto route = [](Backend& be, const LocalModel& lm, const LocalLayout& L) {
+    ShareRoutes r{{}, {}, lm.ids.triangle, lm.ids.edge};
+    r.rank.assign(L.n_free - L.n_owned, 1);
+    r.index.assign(L.n_free - L.n_owned, 0);
+    be.set_share_routes(r);
+  };
+  auto step = [&](Backend& be) {
+    be.compute_forces(dt, g.mass_damping);
+    be.kick(dt);
+    be.drift(dt);
+  };
+  for (const auto& [first, second] : {std::pair{&narrow, &wide}, std::pair{&wide, &narrow}}) {
+    const LocalModel a = build_local_model(g, ix, *first, values(*first, g.x), values(*first, g.v));
+    auto kept = make_backend(backend), fresh = make_backend(backend);
+    kept->upload(a.model);
+    route(*kept, a, *first);
+    for (int n = 0; n < 20; ++n) step(*kept);
+    const BackendState before = kept->save_state();
+    // The new part's x and v: the owned vertices' from the backend, the others' moved.
+    const LocalLayout& L = *second;
+    std::vector<Vec3> x = values(L, moved), v = values(L, g.v);
+    std::copy_n(before.x.begin(), L.n_owned, x.begin());
+    std::copy_n(before.v.begin(), L.n_owned, v.begin());
+    const LocalModel b = build_local_model(g, ix, L, x, v);
+    ContactState history;
+    history.dissipated = before.contact->dissipated;
+    kept->upload_same_tets(b.model, L.n_interior);
+    kept->load_history(history);
+    route(*kept, b, L);
+    BackendState st;
+    st.x = x;
+    st.v = v;
+    st.f.assign(x.size(), Vec3{});
+    st.diss_v.assign(x.size(), 0.0);
+    std::copy_n(before.diss_v.begin(), L.n_owned, st.diss_v.begin());
+    st.diss_t = before.diss_t;
+    st.contact = history;
+    fresh->upload(b.model);
+    fresh->load_state(st);
+    route(*fresh, b, L);
+    for (int n = 0; n < 20; ++n) step(*kept), step(*fresh);
+    const BackendState p = kept->save_state(), q = fresh->save_state();
+    EXPECT_TRUE(same(p.x, q.x) && same(p.v, q.v) && same(p.f, q.f));
+    EXPECT_TRUE(same(p.diss_v, q.diss_v) && same(p.diss_t, q.diss_t));
+    EXPECT_EQ(kept->energies().total(), fresh->energies().total());
+    EXPECT_FALSE(same(p.x, before.x));
+  }
+}
+
+TEST(LocalModel, AGhostOnlyUploadKeepsTheOwnedStateAsALoadGivesIt) {
+  ghost_upload_keeps_the_owned_state("cpu");
+}
+
+TEST(LocalModel, OnTheGpuAGhostOnlyUploadKeepsTheOwnedStateAsALoadGivesIt) {
+  if (!cuda_available()) GTEST_SKIP() << "no CUDA device";
+  ghost_upload_keeps_the_owned_state("cuda");
 }
 
 // A part's primitives, triangles and edges are found among its bodies' (ModelIndex's per-body
