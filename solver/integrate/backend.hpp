@@ -162,14 +162,16 @@ class Backend {
   virtual void mark_positions() = 0;
   virtual void queue_max_moved() = 0;
   virtual double max_moved() = 0;
-  // A rank's share of save_state for its export (DistributedBackend::export_state): x, v and
-  // diss_v of the first `vertices` vertices (its owned ones), diss_t of the first `tets` tets
-  // (its home ones), f only with `forces` (a checkpoint keeps it; a layout rebuild evaluates it
-  // again), x0 and f0 only with `relaxation`, and the contact history without the pair list's
-  // reference (it belongs to the layout) or counters; no fc (the coupling keeps it).
+  // A rank's share of save_state for its export (DistributedBackend::export_state): x of the
+  // first `positions` vertices, v and diss_v of the first `vertices` (its owned ones: a layout
+  // rebuild reads the positions first, the rest only when vertices change owner), diss_t of the
+  // first `tets` tets (its home ones), f only with `forces` (a checkpoint keeps it; a layout
+  // rebuild evaluates it again), x0 and f0 only with `relaxation`, and with `history` the
+  // contact history without the pair list's reference (it belongs to the layout) or counters;
+  // no fc (the coupling keeps it).
   struct OwnedPart {
-    std::int64_t vertices = 0, tets = 0;
-    bool forces = false, relaxation = false;
+    std::int64_t positions = 0, vertices = 0, tets = 0;
+    bool forces = false, relaxation = false, history = true;
   };
   virtual BackendState save_owned(const OwnedPart& part) = 0;
   // upload, for a distributed rank's ghosts rebuilt with its owned part the same: `model` has

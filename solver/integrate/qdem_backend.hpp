@@ -432,14 +432,14 @@ class QdemBackend final : public Backend {
   }
 
   BackendState save_state() override {
-    BackendState s = save_fields({nv_, nt_, true, true});
+    BackendState s = save_fields({nv_, nv_, nt_, true, true});
     if (contact_) s.contact = contact_->save_state();
     if (fc_.size() > 0) s.fc = fc_.to_host();
     return s;
   }
   BackendState save_owned(const OwnedPart& part) override {
     BackendState s = save_fields(part);
-    if (contact_) s.contact = contact_->save_history();
+    if (contact_ && part.history) s.contact = contact_->save_history();
     return s;
   }
 
@@ -625,7 +625,7 @@ class QdemBackend final : public Backend {
   BackendState save_fields(const OwnedPart& part) const {
     BackendState s;
     const std::int64_t n = part.vertices;
-    s.x = x_.to_host(n);
+    s.x = x_.to_host(part.positions);
     s.v = v_.to_host(n);
     if (part.forces) s.f = f_.to_host(n);
     s.diss_v = diss_v_.to_host(n);

@@ -653,19 +653,17 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
 
   // This rank's owned vertices and home tets (in their layout's order) and the history of its
   // records, keys and vertices by global id; the forces only with `forces` (a rebuild of the
-  // layout evaluates them again).
-  StateSlice export_slice(bool forces) {
-    BackendState st = local_->save_owned({L_.n_owned, L_.n_home, forces, relaxing_});
+  // layout evaluates them again). Not `whole` (a layout rebuild's, not relaxing): the owned
+  // vertices' x and the history alone, which complete_slice completes when vertices change
+  // owner (else the device keeps the rest: install's keep_owned).
+  StateSlice export_slice(bool forces, bool whole = true) {
+    const std::int64_t n = whole ? L_.n_owned : 0;
+    BackendState st = local_->save_owned(
+        {L_.n_owned, n, whole ? L_.n_home : 0, forces, whole && relaxing_, true});
     StateSlice s;
     s.vertex = owned_vertices();
     s.x = std::move(st.x);
-    s.v = std::move(st.v);
-    s.f = std::move(st.f);
-    s.diss_v = std::move(st.diss_v);
-    s.x0 = std::move(st.x0);
-    s.f0 = std::move(st.f0);
-    s.tet = home_tets();
-    s.diss_t = std::move(st.diss_t);
+    if (whole) take_state(s, st);
     if (!st.contact) return s;
     // Each history entry once: a rank holds the history of the records it evaluates only
     // (those anchored at its owned vertices, contact_record.hpp anchor_slot). An inactive
@@ -685,6 +683,24 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       for (int k = 0; k < 4; ++k) h.v[j][k] = c.v[e][k] >= 0 ? L_.vertices[c.v[e][k]] : -1;
     });
     return s;
+  }
+
+  // The owned vertices' v, dissipation and forces, relaxation start state, and the home tets
+  // and their dissipation from `st` into `s`.
+  void take_state(StateSlice& s, BackendState& st) const {
+    s.v = std::move(st.v);
+    s.f = std::move(st.f);
+    s.diss_v = std::move(st.diss_v);
+    s.x0 = std::move(st.x0);
+    s.f0 = std::move(st.f0);
+    s.tet = home_tets();
+    s.diss_t = std::move(st.diss_t);
+  }
+
+  // The rest of a slice export_slice(false, false) gave, read when vertices change owner.
+  void complete_slice(StateSlice& s) {
+    BackendState st = local_->save_owned({0, L_.n_owned, L_.n_home, false, false, false});
+    take_state(s, st);
   }
 
   // The whole model's state on rank 0, as one rank's backend has it: free vertices and tets
@@ -1004,15 +1020,21 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     {
       auto scope = timers_.scope("migration");
       auto s1 = timers_.scope("migration.export");
-      s = export_slice(false);
+      s = export_slice(false, relaxing_);
     }
     // A new cut that moves no vertex (timing noise) keeps the rank's model; a moved band
     // always rebuilds the ghosts, from the rank's own export when no vertex changed owner.
     const std::int64_t changed = reassign(s, rebalance);
-    if (changed > 0)
+    if (changed > 0) {
+      if (!relaxing_) {
+        auto scope = timers_.scope("migration");
+        auto s1 = timers_.scope("migration.export");
+        complete_slice(s);
+      }
       migrate(s);
-    else if (rebuild)
+    } else if (rebuild) {
       install_own(s);
+    }
     rebuilt_at_ = MPI_Wtime();
     rebuild_s_ = rebuilt_at_ - t0;
     RebuildEntry& e =
@@ -1149,13 +1171,16 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   }
 
   // A layout rebuild in which no vertex changed owner: every vertex, tet and history entry
-  // stays on its rank, so the rank's own export (export_slice) is its part, with its halo tets
-  // added (their dissipation is counted by their home ranks; here it starts again from zero),
-  // and the held tets are the last layout's (they follow from the owners alone).
+  // stays on its rank, and the held tets are the last layout's (they follow from the owners
+  // alone). The device keeps the owned state and the tets' dissipation; while relaxing the
+  // rank's own whole export (export_slice) is its part, with its halo tets added (their
+  // dissipation is counted by their home ranks; here it starts again from zero).
   void install_own(StateSlice& s) {
     auto scope = timers_.scope("migration");
-    s.tet.insert(s.tet.end(), L_.tets.begin() + L_.n_home, L_.tets.end());
-    s.diss_t.resize(L_.tets.size(), 0.0);
+    if (relaxing_) {
+      s.tet.insert(s.tet.end(), L_.tets.begin() + L_.n_home, L_.tets.end());
+      s.diss_t.resize(L_.tets.size(), 0.0);
+    }
     install(s, true);
   }
 
@@ -1513,12 +1538,12 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     // The same owned vertices and held tets as the last layout (a rebuild of the ghosts that
     // moved no vertex): the tets' reference data stay in the model and on the device. When
     // `s` is the rank's own export (same_owners) and not relaxing, the owned vertices' state
-    // and the tets' dissipation stay on the device too (keep_owned).
+    // and the tets' dissipation stay on the device too (keep_owned): `s` has their x alone.
     const bool same_tets =
         same_owners ||
         (rebuilds_ > 0 && L.n_owned == L_.n_owned && L.tets == L_.tets &&
          std::equal(L.vertices.begin(), L.vertices.begin() + L.n_owned, L_.vertices.begin()));
-    const bool keep_owned = same_owners && s.x0.empty();
+    const bool keep_owned = same_owners && !relaxing_;
     // The state the backend gets (kept: a rebuild writes it in place, on the threads), with
     // the positions and velocities the model is built from: owned from the slice, ghosts from
     // their owners, fixed bodies' from the model.
@@ -1534,9 +1559,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       const bool fixed = i >= nf;
       if (i < no || fixed) {
         st.x[i] = fixed ? g.x[L.vertices[i]] : s.x[i];
-        st.v[i] = fixed ? g.v[L.vertices[i]] : s.v[i];
+        if (fixed || !keep_owned) st.v[i] = fixed ? g.v[L.vertices[i]] : s.v[i];
       }
-      if (keep_owned) return;
+      if (keep_owned) return;  // nor the owned vertices' v: upload_same_tets keeps theirs
       // A rebuild's slice has no forces: compute_forces evaluates them next.
       st.f[i] = i < nsf ? s.f[i] : Vec3{};
       st.diss_v[i] = i < no ? s.diss_v[i] : 0.0;
