@@ -451,8 +451,7 @@ class ContactStage {
       for_each(HostExec{}, nv, [&](std::int64_t i) {
         by_gid[i] = {ids ? m.gid[i] : static_cast<std::uint64_t>(i), static_cast<std::int32_t>(i)};
       });
-      if (ids && nv > 0)
-        radix_sort(by_gid, tmp, std::bit_width(*std::max_element(m.gid.begin(), m.gid.end())));
+      merge_runs(by_gid, tmp);  // a rank's vertices come in a few runs by global id
       for_each(HostExec{}, nv,
                [&](std::int64_t k) { rank[by_gid[k].second] = static_cast<std::int32_t>(k); });
     });

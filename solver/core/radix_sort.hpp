@@ -1,7 +1,7 @@
 // Host sort of (key, value) records by a 64-bit key: LSD radix, 8 bits a pass, on OpenMP
-// threads. For the host work of a layout rebuild (parallel/balance.cpp: items by curve key;
-// sph/sph_stage.hpp: particles by order key; a rank's vertices by global id), where a
-// comparison sort was serial.
+// threads; merge_runs for records that come in a few sorted runs. For the host work of a layout
+// rebuild (parallel/balance.cpp: items by curve key; sph/sph_stage.hpp: particles by order key; a
+// rank's vertices by global id), where a comparison sort was serial.
 //
 // Stable, so the result is the same for any thread count: each thread counts the digits of its
 // block, the counts are scanned in (digit, thread) order, and each thread scatters its block in
@@ -19,6 +19,7 @@
 #endif
 
 #include "core/exec_host.hpp"
+#include "core/select_host.hpp"
 
 namespace qdemsph {
 
@@ -62,6 +63,35 @@ void radix_sort(std::vector<std::pair<std::uint64_t, V>>& a,
         for (std::int64_t i = b; i < e; ++i) tmp[c[(a[i].first >> shift) & 255]++] = a[i];
     }
     if (moves) a.swap(tmp);
+  }
+}
+
+// Sorts a by key, stably, where a comes in a few ascending runs (a distributed rank's vertices:
+// its owned ones, each neighbour's ghosts, the fixed bodies', each run in global id order):
+// adjacent runs merged pairwise, round after round, the merges of a round on the threads; O(n
+// log runs), nothing moved when a is sorted. tmp: scratch, as radix_sort's.
+template <class V>
+void merge_runs(std::vector<std::pair<std::uint64_t, V>>& a,
+                std::vector<std::pair<std::uint64_t, V>>& tmp) {
+  const auto n = static_cast<std::int64_t>(a.size());
+  std::vector<std::int64_t> start = select_indices(
+      HostExec{}, n, [&](std::int64_t i) { return i == 0 || a[i].first < a[i - 1].first; });
+  if (start.size() <= 1) return;
+  start.push_back(n);
+  resize_for_overwrite(tmp, a.size());
+  const auto by_key = [](const auto& x, const auto& y) { return x.first < y.first; };
+  while (start.size() > 2) {  // runs [start[r], start[r + 1])
+    const auto runs = static_cast<std::int64_t>(start.size()) - 1;
+    for_each(HostExec{}, (runs + 1) / 2, [&](std::int64_t j) {
+      const auto b = a.begin() + start[2 * j], m = a.begin() + start[std::min(2 * j + 1, runs)],
+                 e = a.begin() + start[std::min(2 * j + 2, runs)];
+      std::merge(b, m, m, e, tmp.begin() + start[2 * j], by_key);
+    });
+    a.swap(tmp);
+    std::vector<std::int64_t> next;
+    for (std::int64_t r = 0; r < runs; r += 2) next.push_back(start[r]);
+    next.push_back(n);
+    start.swap(next);
   }
 }
 

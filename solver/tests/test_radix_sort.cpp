@@ -58,3 +58,42 @@ TEST(RadixSort, SkipsADigitCommonToAllKeys) {
   radix_sort(a, tmp, 16);
   EXPECT_EQ(a, (Records{{0x100, 1}, {0x100, 3}, {0x200, 2}, {0x300, 0}}));
 }
+
+// merge_runs: records in ascending runs (a rank's vertices by global id: owned, each
+// neighbour's ghosts, fixed) come out in the stable order by key for any count of runs, equal
+// keys across runs in input order, on one thread and on several; from one run up to every
+// record its own run (random keys).
+TEST(RadixSort, MergeRunsGivesTheStableOrder) {
+  std::mt19937_64 rng(11);
+  for (std::int64_t n : {0, 1, 7, 1000, 100000})
+    for (int runs : {1, 2, 3, 5, 17, 0}) {  // 0: random keys
+      Records a(n);
+      std::int64_t begin = 0;
+      for (int r = 0; r < runs; ++r) {
+        const std::int64_t end =
+            r + 1 == runs ? n : std::min<std::int64_t>(n, begin + rng() % (2 * n / runs + 1));
+        std::vector<std::uint64_t> keys(end - begin);
+        for (auto& k : keys) k = rng() % (n + 1);  // repeats within and across runs
+        std::sort(keys.begin(), keys.end());
+        for (std::int64_t i = begin; i < end; ++i) a[i] = {keys[i - begin], i};
+        begin = end;
+      }
+      if (runs == 0)
+        for (std::int64_t i = 0; i < n; ++i) a[i] = {rng() % (n + 1), i};
+      Records want = a;
+      std::stable_sort(want.begin(), want.end(),
+                       [](const auto& x, const auto& y) { return x.first < y.first; });
+      for (int threads : {1, 3}) {
+#ifdef _OPENMP
+        const int before = omp_get_max_threads();
+        omp_set_num_threads(threads);
+#endif
+        Records got = a, tmp;
+        merge_runs(got, tmp);
+#ifdef _OPENMP
+        omp_set_num_threads(before);
+#endif
+        EXPECT_EQ(got, want) << n << " records, " << runs << " runs, " << threads << " threads";
+      }
+    }
+}
