@@ -336,20 +336,30 @@ TEST(LocalModel, BuildIntoAnEarlierPartsStorageEqualsAFreshBuild) {
   }
 }
 
+// One part of kScene (cut at x = 0.3) with two ghost sets: its tets' other vertices (narrow),
+// and those and the other side's vertices in a band (wide); the same owned vertices and tets.
+// `moved`: the model's positions moved a little (a later layout's).
+struct GhostLayouts {
+  testing::Problem pb = make_problem(kScene);
+  const Model& g = pb.model;
+  const ModelIndex ix = index_model(g);
+  const LocalLayout narrow = layout_of(g, ix, 0, 0.3), wide = layout_of(g, ix, 0, 0.3, 0.25);
+  std::vector<Vec3> moved = g.x;
+  GhostLayouts() {
+    for (auto& p : moved) p += Vec3{0.001, -0.002, 0.003};
+  }
+};
+
 // A rebuild of the ghosts alone (the same owned vertices and tets, same_tets: the owned
 // vertices' and tets' reference data stand) into the last part's storage equals a fresh
 // build, whether the ghosts grow or shrink, with x and v of the new build.
 TEST(LocalModel, AGhostOnlyRebuildIntoTheLastPartEqualsAFreshBuild) {
-  auto pb = make_problem(kScene);
-  const Model& g = pb.model;
-  const ModelIndex ix = index_model(g);
-  const LocalLayout narrow = layout_of(g, ix, 0, 0.3), wide = layout_of(g, ix, 0, 0.3, 0.25);
+  const GhostLayouts s;
+  const auto& [pb, g, ix, narrow, wide, moved] = s;
   ASSERT_EQ(narrow.tets, wide.tets);
   ASSERT_EQ(narrow.n_owned, wide.n_owned);
   ASSERT_GT(wide.n_free, narrow.n_free);
   ASSERT_GT(narrow.n_interior, 0);
-  std::vector<Vec3> moved = g.x;
-  for (auto& p : moved) p += Vec3{0.001, -0.002, 0.003};
   for (const auto& [first, second] : {std::pair{&narrow, &wide}, std::pair{&wide, &narrow}}) {
     LocalModel reused;
     build_local_model(g, ix, *first, values(*first, g.x), values(*first, g.v), reused);
@@ -368,14 +378,10 @@ TEST(LocalModel, AGhostOnlyRebuildIntoTheLastPartEqualsAFreshBuild) {
 // tet's dissipation kept), bit for bit, whether the ghosts grow (their numbers and the
 // boundary tets' vertex numbers change) or shrink.
 void ghost_upload_keeps_the_owned_state(const char* backend) {
-  auto pb = make_problem(kScene);
-  const Model& g = pb.model;
-  const ModelIndex ix = index_model(g);
-  const LocalLayout narrow = layout_of(g, ix, 0, 0.3), wide = layout_of(g, ix, 0, 0.3, 0.25);
+  const GhostLayouts s;
+  const auto& [pb, g, ix, narrow, wide, moved] = s;
   ASSERT_EQ(narrow.tets, wide.tets);
   ASSERT_LT(narrow.n_interior, narrow.n_home);
-  std::vector<Vec3> moved = g.x;
-  for (auto& p : moved) p += Vec3{0.001, -0.002, 0.003};
   const double dt = 1e-4;
   // The ghosts' shares go to a rank 1 (this test exchanges none).
   auto route = [](Backend& be, const LocalModel& lm, const LocalLayout& L) {
