@@ -96,18 +96,9 @@ void reduce_max_to(HostExec, std::int64_t n, F f, double init, double* out) {
   *out = reduce_max(HostExec{}, n, f, init);
 }
 
-// b <- h on the host's threads (write_on_host): in place for a host buffer, through `stage`
-// (page-locked on a GPU rank: one copy at the link's speed) for a device. For a model's large
-// arrays, which Buffer::assign copies on one thread, or from pageable memory to a device.
-template <class T>
-void assign_on_threads(Buffer<T>& b, const std::vector<T>& h, StagingBytes& stage) {
-  const auto n = static_cast<std::int64_t>(h.size());
-  write_on_host(b, n, stage,
-                [&](T* out) { for_each(HostExec{}, n, [&](std::int64_t i) { out[i] = h[i]; }); });
-}
-
 // Entries [begin, end) of b (within its size) <- value(i), computed on the host's threads; the
-// others stay. A device buffer's go through `stage` (one copy), as write_on_host's.
+// others stay. A device buffer's go through `stage` (one copy, at the link's speed when it is
+// page-locked, as on a GPU rank), as write_on_host's.
 template <class T, class Value>
 void write_range_on_host(Buffer<T>& b, std::int64_t begin, std::int64_t end, StagingBytes& stage,
                          Value value) {
@@ -124,15 +115,16 @@ void write_range_on_host(Buffer<T>& b, std::int64_t begin, std::int64_t end, Sta
 }
 
 // b <- h where only entries from `first` on are copied: the first ones stand (a distributed
-// rank's owned vertices, when only its ghosts changed). first = 0: assign_on_threads.
+// rank's owned vertices, when only its ghosts changed).
 template <class T>
 void assign_tail_on_threads(Buffer<T>& b, const std::vector<T>& h, std::int64_t first,
                             StagingBytes& stage) {
-  if (first == 0) return assign_on_threads(b, h, stage);
   const auto n = static_cast<std::int64_t>(h.size());
-  b.resize_keep(n);
+  first == 0 ? b.resize_for_overwrite(n) : b.resize_keep(n);  // before `stage`: see write_on_host
   write_range_on_host(b, first, n, stage, [&](std::int64_t i) { return h[i]; });
 }
+
+// The same for 3-vectors, a component at a time.
 inline void assign_tail_on_threads(Vec3Buffer& b, const std::vector<Vec3>& h, std::int64_t first,
                                    StagingBytes& stage) {
   if (first == 0) return b.assign(h);
@@ -140,6 +132,14 @@ inline void assign_tail_on_threads(Vec3Buffer& b, const std::vector<Vec3>& h, st
   b.resize_keep(n);
   for (int a = 0; a < 3; ++a)
     write_range_on_host(b.component(a), first, n, stage, [&](std::int64_t i) { return h[i][a]; });
+}
+
+// b <- h on the host's threads: in place for a host buffer, through `stage` (page-locked on a
+// GPU rank: one copy at the link's speed) for a device. For a model's large arrays, which
+// Buffer::assign copies on one thread, or from pageable memory to a device.
+template <class T>
+void assign_on_threads(Buffer<T>& b, const std::vector<T>& h, StagingBytes& stage) {
+  assign_tail_on_threads(b, h, 0, stage);
 }
 
 }  // namespace qdemsph
