@@ -24,6 +24,15 @@ namespace {
 // The deepest box depth_of() tries, in band cells on each side.
 constexpr int kMaxDepth = 8;
 
+// An axis-aligned box of positions (every rank's particles at a layout); unbounded by default.
+struct Bounds {
+  Vec3 lo{-kInf, -kInf, -kInf}, hi{kInf, kInf, kInf};
+  bool holds(Vec3 p) const {
+    return p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= hi.x && p.y <= hi.y && p.z <= hi.z;
+  }
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+};
+
 std::vector<CommField> fields_of(FluidParticles& p) {
   return {comm_field(p.x),    comm_field(p.v),   comm_field(p.rho), comm_field(p.m),
           comm_field(p.type), comm_field(p.gid), comm_field(p.key)};
@@ -109,15 +118,17 @@ class MpiFluidExchange final : public FluidExchange {
                [&](std::int64_t i) { dest_[i] = owner_of_key(dec_.splitters, curve_key_[i]); });
     } else {
       // On the standing cut, a particle whose band cell was interior at the last layout (its
-      // box of depth d, (2 d + 1)^3 band cells, all this rank's piece: depth_of()) that has
-      // moved less than d - 1 band cells since (at most reached_ times its reach, keep()) is
-      // still inside that box and stays, without its key (most particles: rank 0's owners of
-      // the 359 k-particle dam break on 2 ranks of one thread, 14.6 -> 3.1 ms a rebuild).
+      // box of depth d, (2 d + 1)^3 band cells, all this rank's piece within the particles'
+      // bounds then: depth_of()) that has moved less than d - 1 band cells since (at most
+      // reached_ times its reach, keep()) and not out of those bounds is still in this rank's
+      // piece and stays, without its key (most particles: rank 0's owners of the 359 k-particle
+      // dam break on 2 ranks of one thread, 14.6 -> 3.1 ms a rebuild).
       const bool known = p.slot.size() == p.size() && n == static_cast<std::int64_t>(depth_.size());
       for_each(HostExec{}, n, [&](std::int64_t i) {
         const std::int64_t s = known ? p.slot[i] : -1;
-        const bool stays =
-            s >= 0 && depth_[s] > 0 && reached_ * reach_[s] < (depth_[s] - 1) * depth_band_;
+        const bool stays = s >= 0 && depth_[s] > 0 &&
+                           reached_ * reach_[s] < (depth_[s] - 1) * depth_band_ &&
+                           bounds_.holds(p.x[i]);
         dest_[i] = stays ? me_ : owner_of_key(dec_.splitters, dec_.grid.key(p.x[i]));
       });
     }
@@ -265,6 +276,7 @@ class MpiFluidExchange final : public FluidExchange {
   // with its own table of the distinct cells of its particles (a cell at a block's edge is in
   // two tables, and tested twice), so all but the publication runs in parallel.
   void find_ghost_ranks(const std::vector<Vec3>& x, std::int64_t nown) {
+    bounds_ = particle_bounds(x, nown);
     GhostScratch& g = g_;
     const std::int64_t nb = nown >= kMinParallel ? omp_get_max_threads() : 1;
     const auto lo = [&](std::int64_t b) { return nown * b / nb; };
@@ -359,13 +371,27 @@ class MpiFluidExchange final : public FluidExchange {
     }
   }
 
+  // The bounds of the first nown positions of every rank.
+  Bounds particle_bounds(const std::vector<Vec3>& x, std::int64_t nown) {
+    auto e = reduce_max_each<6>(
+        HostExec{}, nown,
+        [&](std::int64_t i) {
+          return std::array<double, 6>{-x[i].x, -x[i].y, -x[i].z, x[i].x, x[i].y, x[i].z};
+        },
+        -std::numeric_limits<double>::infinity());
+    MPI_Allreduce(MPI_IN_PLACE, e.data(), 6, MPI_DOUBLE, MPI_MAX, comm_);
+    return {{-e[0], -e[1], -e[2]}, {e[3], e[4], e[5]}};
+  }
+
   // The depth of band cell `key` in this rank's piece: the largest k of 2, 4, 8 whose box of
   // (2 k + 1)^3 band cells around it is interior(), 0 when none is (the cell is on the piece's
-  // border: another rank's particle may be within the ghost band of its particles).
+  // border: another rank's particle may be within the ghost band of its particles). The widest
+  // box is tried first: interior() holds for a box inside one it holds for (the smaller box's
+  // tree cells lie in the larger one's), and most cells are deep (one test, not three).
   int depth_of(std::uint64_t key, GhostBlock& memo) const {
-    int d = 0;
-    for (int k = 2; k <= kMaxDepth && interior(key, k, memo); k *= 2) d = k;
-    return d;
+    int k = kMaxDepth;
+    while (k >= 2 && !interior(key, k, memo)) k /= 2;
+    return k >= 2 ? k : 0;
   }
   // How far a particle of a cell of depth d (depth_of) may move while the layout stands. At the
   // layout every other rank's particle that is no ghost of this rank was at least max(d, 2)
@@ -377,11 +403,14 @@ class MpiFluidExchange final : public FluidExchange {
   // and far wall: 55 -> 29 layouts on two GPUs).
   double reach_of(int d, double w) const { return (std::max(d, 2) * w - support_) / 2; }
 
-  // True when every point of the (2 k + 1)^3 band cells around cell `key` belongs to this rank:
-  // the box lies in at most 2 x 2 x 2 cells of some tree level, and each of their curve
-  // segments (keys are hierarchical, sfc.hpp) lies in this rank's piece. Conservative: false
-  // may be answered for an interior cell (it is then published needlessly), never true for
-  // another. Periodic z: a box across the seam is not interior.
+  // True when every point of the (2 k + 1)^3 band cells around cell `key` within the particles'
+  // bounds (bounds_: no rank has a particle outside) belongs to this rank: that part of the box
+  // lies in at most 2 x 2 x 2 cells of some tree level, and each of their curve segments (keys
+  // are hierarchical, sfc.hpp) lies in this rank's piece. Conservative: false may be answered
+  // for an interior cell (it is then published needlessly), never true for another. Periodic
+  // z: a box across the seam is not interior. Without the bounds, a box reaching past the
+  // particles into empty space that another rank's piece covers was not interior: the dam
+  // break's free surfaces at its open sides had the border's reach there.
   bool interior(std::uint64_t key, int k, GhostBlock& memo) const {
     const SfcGrid& g = dec_.grid;
     const std::uint64_t first = dec_.splitters[me_], last = dec_.splitters[me_ + 1];
@@ -396,6 +425,10 @@ class MpiFluidExchange final : public FluidExchange {
       hi[a] = g.coord(band_.lo(c[a] + k + 1, a), g.lo[a]);
       lo[a] -= lo[a] > 0;
       hi[a] += hi[a] + 1 < g.side();
+      // Within the finest cells of the particles' bounds (coord() does not decrease).
+      lo[a] = std::max(lo[a], g.coord(bounds_.lo[a], g.lo[a]));
+      hi[a] = std::min(hi[a], g.coord(bounds_.hi[a], g.lo[a]));
+      if (lo[a] > hi[a]) return true;  // no particle in the box
     }
     const std::uint32_t base = curve_base(g.curve);
     std::uint32_t s = 1;  // finest cells per side of a cell of the level
@@ -516,6 +549,7 @@ class MpiFluidExchange final : public FluidExchange {
   // (reach_of()); reached_: every particle's displacement since, at most, as a multiple of its
   // reach (keep()), unknown after distribute() until keep() measures it.
   static constexpr double kUnknown = std::numeric_limits<double>::infinity();
+  Bounds bounds_;  // every rank's owned positions at the last layout
   std::vector<std::uint8_t> depth_;
   std::vector<double> reach_;
   double depth_band_ = 0, reached_ = kUnknown;
