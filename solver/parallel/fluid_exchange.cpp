@@ -140,7 +140,8 @@ class MpiFluidExchange final : public FluidExchange {
     // end, and those that arrive are appended (the owned particles' order is free: the stage
     // lays them out by key).
     part.emplace(timers, "sph.rebuild.migrate");
-    leave_ = select_indices(HostExec{}, n, [&](std::int64_t i) { return dest_[i] != me_; });
+    select_indices(
+        HostExec{}, n, [&](std::int64_t i) { return dest_[i] != me_; }, leave_);
     const auto nl = static_cast<std::int64_t>(leave_.size()), nk = n - nl;
     resize_for_overwrite(out_, nl);
     resize_for_overwrite(out_dest_, static_cast<std::size_t>(nl));
@@ -154,7 +155,8 @@ class MpiFluidExchange final : public FluidExchange {
     migrated_bytes_ += migrate_->engine().last_bytes();
     // The holes below nk (leave_ is increasing), each filled by a kept particle at or above it.
     const auto nh = std::lower_bound(leave_.begin(), leave_.end(), nk) - leave_.begin();
-    fill_ = select_indices(HostExec{}, nl, [&](std::int64_t j) { return dest_[nk + j] == me_; });
+    select_indices(
+        HostExec{}, nl, [&](std::int64_t j) { return dest_[nk + j] == me_; }, fill_);
     copy_items(
         fields_of(p), fields_of(p), nh, [&](std::int64_t j) { return nk + fill_[j]; },
         [&](std::int64_t j) { return leave_[j]; });

@@ -765,7 +765,8 @@ class SphStage final : public FluidStage {
   void pick_owned() {
     const std::int64_t* slot = host_readable(slot_.cview().p, n_, 0);
     const std::int64_t nown = n_own_;
-    pick_ = select_indices(HostExec{}, n_, [&](std::int64_t i) { return slot[i] < nown; });
+    select_indices(
+        HostExec{}, n_, [&](std::int64_t i) { return slot[i] < nown; }, pick_);
   }
   // out = the owned particles' entries (pick_) of a local array: read in place on the host,
   // through one host copy from a device.

@@ -45,6 +45,19 @@ TEST(HostSelect, IndicesInOrderForAnyThreadCount) {
             (std::vector<std::int64_t>{0, 1, 3, 4}));
 }
 
+// Into a kept vector (a layout rebuild's), the same indices in the same storage while they fit.
+TEST(HostSelect, IntoAKeptVectorReusesItsStorage) {
+  const std::int64_t n = 5 * kMinParallel + 17;
+  auto keep = [](std::int64_t i) { return (i * 7919) % 13 < 4; };
+  std::vector<std::int64_t> out;
+  select_indices(HostExec{}, n, keep, out);
+  EXPECT_EQ(out, select_indices(HostExec{}, n, keep));
+  const std::int64_t* storage = out.data();
+  select_indices(HostExec{}, n - 1000, keep, out);  // fewer kept
+  EXPECT_EQ(out, select_indices(HostExec{}, n - 1000, keep));
+  EXPECT_EQ(out.data(), storage);
+}
+
 TEST(HostSelect, BucketsByKeyInOrderForAnyThreadCount) {
   const std::int64_t n = 4 * kMinParallel + 5;
   auto key = [](std::int64_t i) { return static_cast<int>((i * 31) % 7) - 1; };  // -1..5
