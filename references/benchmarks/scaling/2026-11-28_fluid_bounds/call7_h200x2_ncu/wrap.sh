@@ -1,0 +1,2 @@
+#!/bin/bash
+exec /usr/local/cuda/bin/ncu --csv --log-file /root/out/rec/ncu_r${OMPI_COMM_WORLD_RANK}.csv --clock-control none --cache-control none --launch-skip 3000 --launch-count 80 --metrics gpu__time_duration.sum,smsp__thread_inst_executed_per_inst_executed.ratio,sm__warps_active.avg.pct_of_peak_sustained_active,lts__t_sector_hit_rate.pct,dram__bytes_read.sum,smsp__inst_executed.sum,l1tex__t_sector_hit_rate.pct /work/main/build-pack-sel/bin/qdemsph "$@"
