@@ -114,24 +114,27 @@ void write_range_on_host(Buffer<T>& b, std::int64_t begin, std::int64_t end, Sta
     space_copy(b.view().p + begin, b.space(), out, Space::Host, sizeof(T) * n);
 }
 
-// b <- h where only entries from `first` on are copied: the first ones stand (a distributed
-// rank's owned vertices, when only its ghosts changed).
+// b at n entries <- value(i) for i from `first` on, on the host's threads: the first ones stand
+// (a distributed rank's owned vertices, when only its ghosts changed).
+template <class T, class Value>
+void write_tail_on_host(Buffer<T>& b, std::int64_t n, std::int64_t first, StagingBytes& stage,
+                        Value value) {
+  first == 0 ? b.resize_for_overwrite(n) : b.resize_keep(n);  // before `stage`: see write_on_host
+  write_range_on_host(b, first, n, stage, value);
+}
+
+// b <- h where only entries from `first` on are copied; 3-vectors a component at a time.
 template <class T>
 void assign_tail_on_threads(Buffer<T>& b, const std::vector<T>& h, std::int64_t first,
                             StagingBytes& stage) {
-  const auto n = static_cast<std::int64_t>(h.size());
-  first == 0 ? b.resize_for_overwrite(n) : b.resize_keep(n);  // before `stage`: see write_on_host
-  write_range_on_host(b, first, n, stage, [&](std::int64_t i) { return h[i]; });
+  write_tail_on_host(b, static_cast<std::int64_t>(h.size()), first, stage,
+                     [&](std::int64_t i) { return h[i]; });
 }
-
-// The same for 3-vectors, a component at a time.
 inline void assign_tail_on_threads(Vec3Buffer& b, const std::vector<Vec3>& h, std::int64_t first,
                                    StagingBytes& stage) {
-  if (first == 0) return b.assign(h);
-  const auto n = static_cast<std::int64_t>(h.size());
-  b.resize_keep(n);
   for (int a = 0; a < 3; ++a)
-    write_range_on_host(b.component(a), first, n, stage, [&](std::int64_t i) { return h[i][a]; });
+    write_tail_on_host(b.component(a), static_cast<std::int64_t>(h.size()), first, stage,
+                       [&](std::int64_t i) { return h[i][a]; });
 }
 
 // b <- h on the host's threads: in place for a host buffer, through `stage` (page-locked on a
