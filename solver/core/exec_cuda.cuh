@@ -1,8 +1,9 @@
 // The CUDA launch layer, twin of exec_host.hpp: stage code written once against
 // for_each / reduce_sum / reduce_max runs here as CUDA kernels. nvcc only (.cu files).
 //
-//  - for_each(CudaExec, n, f): a grid-stride kernel, 256 threads a block, at most
-//    32 blocks per SM (4 waves of 8 resident blocks), f(i) once for every i in [0, n).
+//  - for_each(CudaExec, n, f): a grid-stride kernel, 256 threads a block (MinBlocks<N, T>: T),
+//    at most 8192 threads per SM (4 waves of 8 resident blocks of 256), f(i) once for every i
+//    in [0, n).
 //    Asynchronous: the host does not wait; exec_sync() waits and reports kernel faults.
 //  - reduce_sum / reduce_max: two levels in one kernel. Level 1: B = min(ceil(n / 256), 1024)
 //    blocks, thread j of block b folds i = b*256 + j, + 256 B, ... in increasing order, then a
@@ -39,7 +40,7 @@ struct CudaExec {
     if (qdemsph_err_ != cudaSuccess) ::qdemsph::cuda_fail(qdemsph_err_, what, __FILE__, __LINE__); \
   } while (0)
 
-// memory_cuda.cu: the grid cap for for_each (32 blocks per SM of the current device), the
+// memory_cuda.cu: the grid cap for for_each (32 blocks of 256 per SM of the current device), the
 // stream this thread queues on, a device scratch for the reductions of that stream
 // (cuda_detail::kMaxPartials partials, the result, the count of finished blocks), and a
 // grow-only device scratch of at least `bytes` for CUB's temporary storage (sorts, scans; one
@@ -76,10 +77,10 @@ namespace cuda_detail {
 
 inline constexpr int kBlock = 256;
 inline constexpr int kMaxPartials = 1024;
-// MinBlocks: resident blocks per SM asked of the register allocator (1: no cap; 3: at most
-// 85 registers a thread; 4: 64).
-template <int B, class F>
-__global__ void __launch_bounds__(kBlock, B) for_each_kernel(std::int64_t n, F f) {
+// MinBlocks<B, T>: blocks of T threads, B of them resident per SM asked of the register
+// allocator (B = 1: no cap; T B = 768: at most 85 registers a thread; 1024: 64).
+template <int B, int T, class F>
+__global__ void __launch_bounds__(T, B) for_each_kernel(std::int64_t n, F f) {
   const std::int64_t stride = static_cast<std::int64_t>(blockDim.x) * gridDim.x;
   for (std::int64_t i = static_cast<std::int64_t>(blockIdx.x) * blockDim.x + threadIdx.x; i < n;
        i += stride)
@@ -155,13 +156,14 @@ double reduce(std::int64_t n, F f, Op op, double init) {
 
 }  // namespace cuda_detail
 
-template <class F, int B = 1>
-void for_each(CudaExec, std::int64_t n, F f, MinBlocks<B> = {}) {
+template <class F, int B = 1, int T = cuda_detail::kBlock>
+void for_each(CudaExec, std::int64_t n, F f, MinBlocks<B, T> = {}) {
+  static_assert(T % 32 == 0 && cuda_detail::kBlock % T == 0, "whole warps, dividing 256");
   if (n <= 0) return;
-  const std::int64_t want = (n + cuda_detail::kBlock - 1) / cuda_detail::kBlock;
-  const std::int64_t cap = cuda_grid_cap();
+  const std::int64_t want = (n + T - 1) / T;
+  const std::int64_t cap = cuda_grid_cap() * std::int64_t{cuda_detail::kBlock / T};
   const int blocks = static_cast<int>(want < cap ? want : cap);
-  cuda_detail::for_each_kernel<B><<<blocks, cuda_detail::kBlock, 0, cuda_stream()>>>(n, f);
+  cuda_detail::for_each_kernel<B, T><<<blocks, T, 0, cuda_stream()>>>(n, f);
   QDEMSPH_CUDA_CHECK(cudaGetLastError(), "for_each kernel launch");
 }
 

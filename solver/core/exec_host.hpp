@@ -36,8 +36,8 @@ inline int default_host_threads(int bound_cores, int node_cores, int ranks_on_no
 // than a small loop's work, and far more when the cores are shared.
 inline constexpr std::int64_t kMinParallel = 4096;
 
-template <class F, int N = 1>
-void for_each(HostExec, std::int64_t n, F f, MinBlocks<N> = {}) {
+template <class F, int N = 1, int T = 256>
+void for_each(HostExec, std::int64_t n, F f, MinBlocks<N, T> = {}) {
 #pragma omp parallel for schedule(static) if (n >= kMinParallel)
   for (std::int64_t i = 0; i < n; ++i) f(i);
 }

@@ -19,10 +19,12 @@
 #endif
 
 namespace qdemsph {
-// Launch hint for for_each: keep at least N blocks of 256 threads resident per SM on CUDA
-// (caps the registers a thread at 65536 / (256 N)); the host ignores it. For register-heavy
-// loops whose occupancy, not their arithmetic, limits them (sph/sph_stage.hpp).
-template <int N>
+// Launch hint for for_each: on CUDA, blocks of T threads, at least N of them resident per SM
+// (caps the registers a thread at 65536 / (T N)); the host ignores it. For register-heavy
+// loops whose occupancy, not their arithmetic, limits them (sph/sph_stage.hpp). A block keeps
+// its place on the SM until its slowest warp ends, so loops whose items take unequal times
+// (neighbour lists of different lengths) fill the SM better in small blocks.
+template <int N, int T = 256>
 struct MinBlocks {};
 
 // The first index in [0, n) at which before(index) is false, for a predicate true on a prefix

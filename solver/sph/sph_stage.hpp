@@ -62,6 +62,14 @@ inline constexpr int kSphCellsPerSupport = 2;
 // Order keys (fluid_exchange.hpp): (group, cell) sort key << kSphKeyShift | place in the cell.
 inline constexpr int kSphKeyShift = 26;
 
+// The density and force passes on a GPU: at most 85 registers a thread (768 threads an SM;
+// with 98 and 90 only 512 fitted: the dam break's step 4.01 -> 3.61 ms on an H100), in blocks
+// of 64 threads. A block holds its place on the SM until its slowest warp ends, and a particle
+// at a free surface or a wall visits fewer candidates than one in the bulk: the weak dam break
+// (1.1 M particles, an H200) 3.57 -> 3.43 ms a step with blocks of 64, 3.45 with 128
+// (references/benchmarks/scaling/2026-11-28_sph_blocks/).
+inline constexpr MinBlocks<12, 64> kSphPassLaunch{};
+
 // Neighbour ranges over arrays sorted by (group, cell): the particles of group q in cell c are
 // [start[q nc + c], start[q nc + c + 1]), nc the number of cells. Calls f(j, zz) for every
 // particle of the groups [G0, G1) in the (2R + 1)^3 cells around p, R = kSphCellsPerSupport;
@@ -245,8 +253,7 @@ class SphStage final : public FluidStage {
           drho[i] = dr;
           if (cost) cost[i] = 2.0 * visited;
         },
-        MinBlocks<3>{});  // 98 registers left 2 blocks an SM; 3 fit in 80 (52 B spilled): the
-                          // dam break's step 4.01 -> 3.61 ms on an H100
+        kSphPassLaunch);
     // Equation of state (fluid), density floored at the tension cut-off (sph_eos.hpp); the
     // pair term p / rho^2 of every particle once (sph_pair.hpp).
     const auto pr = pr_.view();
@@ -308,7 +315,7 @@ class SphStage final : public FluidStage {
           });
           a.set(i, P.gravity + f / si.m);
         },
-        MinBlocks<3>{});  // 90 registers left 2 blocks an SM; 3 fit in 85 (80, 28 B spilled)
+        kSphPassLaunch);
     if (coupling_) {
       // The fluid's force on each marker: the exact negative of each pair force the marker
       // exerts on the fluid (sph_pair.hpp), so the coupling conserves momentum. Distributed:
