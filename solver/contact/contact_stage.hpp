@@ -328,6 +328,14 @@ QDEMSPH_HD bool first_of_vertex(const Shares& shares, std::int64_t lo) {
 // in flight at once.
 inline constexpr int kMergeChunk = 8;
 
+// The narrow phase's pass on a GPU: at most 128 registers a thread (512 threads an SM; with 143
+// only 256 fitted: on an H100 the cube block's step 2.18 -> 1.75 ms, and 1.90 with 768), in
+// blocks of 64 threads, since candidate pairs take unequal times and a block holds its place on
+// the SM until its slowest warp ends (sph_stage.hpp, kSphPassLaunch): on an H200 the cube block
+// 1.242 -> 1.223 ms a step and the dominoes 0.465 -> 0.458 ms against blocks of 256
+// (references/benchmarks/scaling/2026-11-28_sph_blocks/).
+inline constexpr MinBlocks<8, 64> kNarrowLaunch{};
+
 // Room for n elements in an array that follows a count growing over a run (records, entries,
 // shares): half as much again, so that the count's growth reallocates it a few times a run.
 // Each growth is cheap on a GPU too (stream-ordered pool, core/memory.hpp); with cudaFree and
@@ -1035,8 +1043,7 @@ class ContactStage {
               app(r);
             }
           },
-          MinBlocks<2>{});  // 143 registers left 1 block an SM; 2 fit in 128 (80 B spilled):
-                            // on an H100 the cube block's step 2.18 -> 1.75 ms (3 blocks: 1.90)
+          kNarrowLaunch);
       nc = read_back(count_, 0);
       if (nc <= rec_.size()) break;
       rec_.resize(count_room(nc));
