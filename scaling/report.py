@@ -14,10 +14,11 @@ Writes OUT/report.md (tables), OUT/report.html (tables + figures) and OUT/*.png:
   prediction_<sweep>.png       the model alone to 512 ranks (a PREDICTION, not a measurement)
 
 Efficiency: weak E(N) = t(N_ref) / t(N); strong E(N) = N_ref t(N_ref) / (N t(N)); t = step_s
-(run.py: stepping loop per step, output excluded) of the median run of the newest revision at
-each rank count (series()). The model line of a measured series uses
-per-item costs calibrated from that series' own 1-rank record and the partition geometry of
-its scenes (geometry.py); where it differs from the points, the points are right.
+(run.py: stepping loop per step, output excluded) of the median run of the series' revision at
+each rank count (series()); an E against another revision's t(N_ref) is marked "†". The model
+line of a measured series uses per-item costs calibrated from that series' own 1-rank record
+and the partition geometry of its scenes (geometry.py); where it differs from the points, the
+points are right.
 
 verification/report.py calls `section(out_dir)` and adds the figures and tables to the verify
 report when records exist.
@@ -66,12 +67,26 @@ def machine_label(r) -> str:
     return f"{m.get('cpu', '?')} ({m.get('usable_cores', '?')} cores)"
 
 
+def revision(r):
+    return (r.get("machine") or {}).get("revision")
+
+
+def newest_revision(rs):
+    """The revision of the newest of runs rs, a build's before an experiment's: a pack with
+    changes beside its commit says so with a "+" (run.py: QDEMSPH_REVISION, "d94fa87+exp-..."),
+    and a call that runs it against the build interleaves them, either last."""
+    built = [r for r in rs if "+" not in (revision(r) or "")]
+    return revision(max(built or rs, key=lambda r: r["date"]))
+
+
 def series(recs):
     """{(sweep, backend, variant, host label, overridden preset values): [records sorted by
-    ranks]} of ok runs. Per rank count: of the runs of the newest run's revision, the one with
-    the median step time (the faster of the middle two): repeats of one build (the interleaved
-    runs of a call) give one row, which a single slow run does not decide. The row carries
-    those runs' step times (`step_s_runs`, sorted): their spread is the host's and the run's."""
+    ranks]} of ok runs. The series' revision is the newest run's (newest_revision); a rank
+    count that has none of its runs takes its own newest revision. Per rank count: of the runs
+    of that revision, the one with the median step time (the faster of the middle two): repeats
+    of one build (the interleaved runs of a call) give one row, which a single slow run does
+    not decide. The row carries those runs' step times (`step_s_runs`, sorted): their spread is
+    the host's and the run's."""
     runs = defaultdict(lambda: defaultdict(list))
     for r in recs:
         if r.get("status") != "ok" or not r.get("step_s"):
@@ -82,11 +97,11 @@ def series(recs):
     out = {}
     for k, by_ranks in runs.items():
         out[k] = []
+        cur = newest_revision([r for rs in by_ranks.values() for r in rs])
         for n in sorted(by_ranks):
             rs = by_ranks[n]
-            rev = (max(rs, key=lambda r: r["date"]).get("machine") or {}).get("revision")
-            same = sorted((r for r in rs if (r.get("machine") or {}).get("revision") == rev),
-                          key=lambda r: r["step_s"])
+            rev = cur if any(revision(r) == cur for r in rs) else newest_revision(rs)
+            same = sorted((r for r in rs if revision(r) == rev), key=lambda r: r["step_s"])
             out[k].append(dict(same[(len(same) - 1) // 2], step_s_runs=[r["step_s"] for r in same]))
     return out
 
@@ -97,21 +112,29 @@ def spread(runs) -> str:
 
 
 def efficiencies(rs, mode):
+    """Table rows of a series (series()): E against 1 and 8 ranks, and a strong series' speed-up
+    against its fewest ranks. Where the reference row is of another revision (a rank count the
+    series' newest call did not run), `other_ref` names the references: another build's step
+    time is this one's baseline only where their one-rank code is the same, which the table
+    cannot know, so it marks them."""
     t = {r["ranks"]: r["step_s"] for r in rs}
+    rev = {r["ranks"]: revision(r) for r in rs}
     # Contact work a rank: candidate pairs summed over the ranks, per rank, against one rank's.
     pairs = {r["ranks"]: (r.get("items") or {}).get("contact_pairs") or 0 for r in rs}
     rows = []
     for r in rs:
         n = r["ranks"]
         row = {"ranks": n, "step_s": r["step_s"], "runs": r.get("step_s_runs") or [r["step_s"]],
+               "revision": rev[n],
                "imbalance": r.get("imbalance"),
                "busy_imbalance": r.get("busy_imbalance"),
                "halo_bytes_per_step": r.get("halo_bytes_per_step"),
                "fluid_halo_bytes_per_step": r.get("fluid_halo_bytes_per_step"), "size": r["size"]}
+        row["other_ref"] = [ref for ref in (1, 8) if ref in t and n >= ref and rev[ref] != rev[n]]
         for ref in (1, 8):
             if ref in t and n >= ref:
                 row[f"E{ref}"] = t[ref] / t[n] if mode == "weak" else ref * t[ref] / (n * t[n])
-        if mode == "strong" and min(t) in t:
+        if mode == "strong":
             row["speedup"] = t[min(t)] / t[n]
         if mode == "weak" and pairs.get(1) and pairs[n]:
             row["pairs_ratio"] = pairs[n] / (n * pairs[1])
@@ -125,9 +148,7 @@ def node_factors(rows, rs, copies):
     step: "copies_s"): t(1) / t(N copies) and t(N copies) / t(N ranks), where the copies, the
     1-rank run and the N-rank run are of one revision (another revision's baseline would
     divide unlike step times)."""
-    def rev(r):
-        return (r.get("machine") or {}).get("revision")
-
+    rev = revision
     cop = {r["ranks"]: r for r in copies}
     one = next((r for r in rs if r["ranks"] == 1), None)
     for row, r in zip(rows, rs):
@@ -190,17 +211,21 @@ def plots(recs):
         if any("pairs_ratio" in r for r in rows):
             md.append("*pairs/rank*: the contact candidate pairs a rank, against the 1-rank run's (above 1 where "
                       "the grown scene gives a body more neighbours, or where two ranks test a pair).\n")
+        if any(row["other_ref"] for row in rows):
+            md.append("† against the 1- or 8-rank run of another revision (the revision column).\n")
         md.append("| ranks | tets | particles | ms/step | runs: ms/step | E vs 1 | E vs 8 | node | decomposition | imbalance "
-                  "| busy imbalance | halo MB/step | fluid halo MB/step | pairs/rank |")
-        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+                  "| busy imbalance | halo MB/step | fluid halo MB/step | pairs/rank | revision |")
+        md.append("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|")
         for row in rows:
             f = lambda v, s="{:.3f}": "" if v is None else s.format(v)  # noqa: E731
             mb = lambda v: f(None if v is None else v / 1e6, "{:.2f}")  # noqa: E731
+            e = lambda row, ref: f(row.get(f"E{ref}")) + ("†" if ref in row["other_ref"] else "")  # noqa: E731
             md.append(f"| {row['ranks']} | {row['size']['n_tets']:,} | {row['size']['n_particles']:,} | "
-                      f"{row['step_s'] * 1e3:.2f} | {spread(row['runs'])} | {f(row.get('E1'))} | {f(row.get('E8'))} | "
+                      f"{row['step_s'] * 1e3:.2f} | {spread(row['runs'])} | {e(row, 1)} | {e(row, 8)} | "
                       f"{f(row.get('node'))} | {f(row.get('decomp'))} | "
                       f"{f(row['imbalance'])} | {f(row.get('busy_imbalance'))} | {mb(row['halo_bytes_per_step'])} | "
-                      f"{mb(row.get('fluid_halo_bytes_per_step'))} | {f(row.get('pairs_ratio'))} |")
+                      f"{mb(row.get('fluid_halo_bytes_per_step'))} | {f(row.get('pairs_ratio'))} | "
+                      f"{row['revision'] or ''} |")
         # The model's geometry files are of the presets' sizes.
         pred = (model_line(rs, sweep, backend, ranks) if mode == "weak" and not variant and not params and len(rs) > 1
                 else None)

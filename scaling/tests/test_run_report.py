@@ -118,6 +118,28 @@ def test_a_series_row_is_the_median_run_of_the_newest_revision():
     assert [r["step_s"] for r in rows] == [0.6]
 
 
+def test_a_series_keeps_one_revision_and_its_own_baselines():
+    def run_of(n, rev, date, step):
+        return {**rec(n, step), "status": "ok", "sweep": "dambreak-weak", "backend": "cuda",
+                "variant": "v", "date": date, "machine": {"revision": rev},  # a variant: no model line
+                "phases_per_step": {"sph": step}}
+
+    # A call interleaving a build "b" with an experiment on "a" ("a+exp") that ran last at four
+    # ranks, and an older call of "a" alone at eight.
+    recs = [run_of(1, "b", "2026-01-02T00:00:01", 3.4), run_of(1, "a+exp", "2026-01-02T00:00:02", 3.6),
+            run_of(4, "b", "2026-01-02T00:00:03", 4.8), run_of(4, "a+exp", "2026-01-02T00:00:04", 4.9),
+            run_of(1, "a", "2026-01-01T00:00:00", 3.6), run_of(8, "a", "2026-01-01T00:00:01", 5.0)]
+    assert report.newest_revision(recs) == "b"  # a build before an experiment run after it
+    assert report.newest_revision([r for r in recs if r["machine"]["revision"] == "a+exp"]) == "a+exp"
+    (rs,) = report.series(recs).values()
+    assert [(r["ranks"], r["machine"]["revision"]) for r in rs] == [(1, "b"), (4, "b"), (8, "a")]
+    rows = report.efficiencies(rs, "weak")
+    assert rows[1]["E1"] == pytest.approx(3.4 / 4.8) and rows[1]["other_ref"] == []  # not a+exp's
+    assert rows[2]["revision"] == "a" and rows[2]["other_ref"] == [1]  # b's one-rank run: marked
+    _, md = report.plots(recs)
+    assert any(line.startswith("| 8 |") and "†" in line and "| a |" in line for line in md)
+
+
 def test_node_factor_only_from_copies_of_the_same_revision():
     def run_of(n, step, rev):
         return {**rec(n, step), "machine": {"revision": rev}}
