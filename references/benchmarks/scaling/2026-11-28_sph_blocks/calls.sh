@@ -1,5 +1,5 @@
 #!/bin/bash
-# The five device calls of this folder (README.md), as they ran: `bash calls.sh callN` in the
+# The six device calls of this folder (README.md), as they ran: `bash calls.sh callN` in the
 # repository root of a device machine, with the packs of README's table carried as
 # build-pack-<pack>. Records under $OUT/rec, returned as $OUT/rec.tgz (no h5, xdmf, csv).
 set -u
@@ -160,6 +160,20 @@ call5() {
     for w in c64 base; do run D4_${w}_r$r dambreak-weak 4 $w -; done
     for w in c64 base; do run T4_${w}_r$r topple-weak 4 $w -; done
   done
+}
+
+# Call 6 (2 x H200), rejected: the dam break at two GPUs with the fluid's first skin half a kernel
+# support (s50: 41a55bb with kFluidSkin = 0.5) against 92d07b5.
+call6() {
+  wrapper c64 c64 92d07b5
+  wrapper s50 s50 41a55bb+fluid-skin-0.5
+  run D2_s50_r1 dambreak-weak 2 s50 -
+  run D2_c64_r1 dambreak-weak 2 c64 -
+  run D2_s50_r2 dambreak-weak 2 s50 -
+  run D2_c64_r2 dambreak-weak 2 c64 -
+  run D1_s50_r1 dambreak-weak 1 s50 0
+  run D2_s50_r3 dambreak-weak 2 s50 -
+  run D2_c64_r3 dambreak-weak 2 c64 -
 }
 
 "$1"
