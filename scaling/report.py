@@ -148,12 +148,11 @@ def node_factors(rows, rs, copies):
     step: "copies_s"): t(1) / t(N copies) and t(N copies) / t(N ranks), where the copies, the
     1-rank run and the N-rank run are of one revision (another revision's baseline would
     divide unlike step times)."""
-    rev = revision
     cop = {r["ranks"]: r for r in copies}
     one = next((r for r in rs if r["ranks"] == 1), None)
     for row, r in zip(rows, rs):
         c = cop.get(row["ranks"])
-        if c and one and rev(c) == rev(one) == rev(r):
+        if c and one and revision(c) == revision(one) == revision(r):
             row["copies_s"] = c["step_s"]
             row["node"] = one["step_s"] / c["step_s"]
             row["decomp"] = c["step_s"] / row["step_s"]
@@ -219,9 +218,9 @@ def plots(recs):
         for row in rows:
             f = lambda v, s="{:.3f}": "" if v is None else s.format(v)  # noqa: E731
             mb = lambda v: f(None if v is None else v / 1e6, "{:.2f}")  # noqa: E731
-            e = lambda row, ref: f(row.get(f"E{ref}")) + ("†" if ref in row["other_ref"] else "")  # noqa: E731
+            e = lambda ref: f(row.get(f"E{ref}")) + ("†" if ref in row["other_ref"] else "")  # noqa: E731
             md.append(f"| {row['ranks']} | {row['size']['n_tets']:,} | {row['size']['n_particles']:,} | "
-                      f"{row['step_s'] * 1e3:.2f} | {spread(row['runs'])} | {e(row, 1)} | {e(row, 8)} | "
+                      f"{row['step_s'] * 1e3:.2f} | {spread(row['runs'])} | {e(1)} | {e(8)} | "
                       f"{f(row.get('node'))} | {f(row.get('decomp'))} | "
                       f"{f(row['imbalance'])} | {f(row.get('busy_imbalance'))} | {mb(row['halo_bytes_per_step'])} | "
                       f"{mb(row.get('fluid_halo_bytes_per_step'))} | {f(row.get('pairs_ratio'))} | "
