@@ -15,6 +15,7 @@
 //    one rank bit for bit;
 //  - a slab periodic in z (fluid.periodic_z: the ghost band wraps across the seam) equals one
 //    rank bit for bit, with one band cell across the period and with six;
+//  - on a GPU machine, CUDA stages on one GPU a rank equal one GPU bit for bit;
 //  - the exchange's traffic (summary.json `parallel`: fluid_halo_bytes_per_step,
 //    fluid_migrated_bytes) is what its plans send: ghosts x bytes per ghost x refreshes.
 #include <gtest/gtest.h>
@@ -29,6 +30,7 @@
 
 #include "core/error.hpp"
 #include "core/exec_host.hpp"
+#include "core/memory.hpp"
 #include "distributed_fixture.hpp"
 #include "integrate/stepper.hpp"
 #include "parallel/collectives.hpp"
@@ -194,6 +196,36 @@ TEST(DistributedFluid, DamBreakEqualsOneRankBitForBit) {
       if (h.type[i] == kSphFluid) front = std::max(front, h.x[i].x);
     EXPECT_GT(front, 0.21);
   }
+}
+
+// On a GPU machine (skipped elsewhere): CUDA stages, one GPU a rank, their refreshes resident
+// on the devices and the passes over particles no ghost is near running while the records
+// are copied, equal one GPU bit for bit.
+TEST(DistributedFluid, GpuRanksEqualOneGpuBitForBit) {
+  if (!cuda_available()) GTEST_SKIP() << "no GPU: checked on GPU machines";
+  const FluidSetup f = dam_setup();
+  const bool root = rank_of() == 0;
+  std::unique_ptr<FluidStage> ref = root ? make_fluid_stage("cuda", f) : nullptr;
+  auto dist = make_fluid_stage("cuda", f, nullptr,
+                               make_fluid_exchange(options(50, 0.0), f, Space::Cuda));
+  StateDiff worst;
+  constexpr int kSteps = 300;
+  for (int n = 1; n <= kSteps; ++n) {
+    if (ref) step(*ref);
+    step(*dist);
+    if (n % 50 != 0) continue;
+    const FluidState b = dist->save_state();
+    if (!root) continue;
+    const StateDiff d = diff(ref->save_state(), b);
+    EXPECT_TRUE(d.same_order) << "step " << n;
+    worst.x = std::max(worst.x, d.x), worst.v = std::max(worst.v, d.v);
+    worst.a = std::max(worst.a, d.a), worst.rho = std::max(worst.rho, d.rho);
+    worst.p = std::max(worst.p, d.p), worst.m = std::max(worst.m, d.m);
+  }
+  if (!root) return;
+  std::printf("[fluid dam break on GPUs, %d ranks, %d steps] max |dx| = %.3e m, |drho| = %.3e\n",
+              size_of(), kSteps, worst.x, worst.rho);
+  EXPECT_EQ(worst.max(), 0.0);
 }
 
 TEST(DistributedFluid, MortonAndPeanoPartitionsEqualOneRank) {
