@@ -12,7 +12,8 @@
 // one kernel support + skin; every loop skips ghosts, whose values come from their owners: x, v
 // at each compute() (all fields when the layout is rebuilt: fluid_exchange.hpp, keep()), rho,
 // p, m after the density and after the wall pressure pass; those refreshes pack and unpack
-// the ghost records where the arrays live (refresh_ghosts).
+// the ghost records where the arrays live (start_refresh, finish_refresh), and the passes over
+// the particles no ghost is near run while they travel (over_owned).
 // Wall particles are fixed; markers move with the bodies (sph/solid_coupling.hpp); the p and rho
 // of both come from the fluid by Adami extrapolation.
 //
