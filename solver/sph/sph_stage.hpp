@@ -13,7 +13,7 @@
 // at each compute() (all fields when the layout is rebuilt: fluid_exchange.hpp, keep()), rho,
 // p, m after the density and after the wall pressure pass; those refreshes pack and unpack
 // the ghost records where the arrays live (start_refresh, finish_refresh), and the passes over
-// the particles no ghost is near run while they travel (over_owned).
+// the particles no ghost is near run while they travel (over_fluid).
 // Wall particles are fixed; markers move with the bodies (sph/solid_coupling.hpp); the p and rho
 // of both come from the fluid by Adami extrapolation.
 //
@@ -256,18 +256,18 @@ class SphStage final : public FluidStage {
       // The particles near ghosts first; then the ghosts' new rho, p (the equation of state
       // applied to the records: rho itself is read until the pass ends) and m travel while
       // the others run.
-      over_owned(Near::kGhosts, 0, nf, density_rate, kSphPassLaunch);
+      over_fluid(true, density_rate, kSphPassLaunch);
       const GhostColumns c = pressure_columns();
       start_refresh(
           c, QDEMSPH_LAMBDA(std::int64_t i, int k) {
             const double r = i < nf ? P.eos.next_density(rho[i], drho[i], ddt) : rho[i];
             return k == 0 ? r : k == 1 ? (i < nf ? P.eos.pressure(r) : p[i]) : m[i];
           });
-      over_owned(Near::kNoGhost, 0, nf, density_rate, kSphPassLaunch);
+      over_fluid(false, density_rate, kSphPassLaunch);
       finish_refresh(c);
       ghost_pressure_terms();
     } else {
-      over_owned(Near::kAny, 0, nf, density_rate, kSphPassLaunch);
+      over_owned(0, nf, density_rate, kSphPassLaunch);
     }
     // Equation of state (fluid), density floored at the tension cut-off (sph_eos.hpp); the
     // pair term p / rho^2 of every particle once (sph_pair.hpp).
@@ -286,7 +286,7 @@ class SphStage final : public FluidStage {
       const std::uint64_t g0 = coupling_ ? coupling_->gid0() : 0;
       const auto mvol = coupling_ ? coupling_->volume() : View<const double>{};
       const std::int64_t nm = nml_;
-      over_owned(Near::kAny, nf, n_ - nf, QDEMSPH_LAMBDA(std::int64_t i) {
+      over_owned(nf, n_ - nf, QDEMSPH_LAMBDA(std::int64_t i) {
         const std::int64_t q = i - nf;
         const Vec3 xi = x[i];
         AdamiSum s;
@@ -323,12 +323,12 @@ class SphStage final : public FluidStage {
     if (ex_) {
       const GhostColumns c = pressure_columns();
       start_refresh(c, QDEMSPH_LAMBDA(std::int64_t i, int k) { return c.c[k][i]; });
-      over_owned(Near::kNoGhost, 0, nf, force, kSphPassLaunch);
+      over_fluid(false, force, kSphPassLaunch);
       finish_refresh(c);
       ghost_pressure_terms();
-      over_owned(Near::kGhosts, 0, nf, force, kSphPassLaunch);
+      over_fluid(true, force, kSphPassLaunch);
     } else {
-      over_owned(Near::kAny, 0, nf, force, kSphPassLaunch);
+      over_owned(0, nf, force, kSphPassLaunch);
     }
     if (coupling_) {
       // The fluid's force on each marker: the exact negative of each pair force the marker
@@ -496,7 +496,8 @@ class SphStage final : public FluidStage {
            pr_.bytes() + m_.bytes() + x0_.bytes() + reach_.bytes() + type_.bytes() + gid_.bytes() +
            key_.bytes() + slot_.bytes() + tmp3_.bytes() + tmpd_.bytes() + tmpu_.bytes() +
            tmpt_.bytes() + tmpi_.bytes() + send_.bytes() + inv_.bytes() + pack_.bytes() +
-           cost_.bytes() + keys_.bytes() + start_.bytes() + order_.bytes() + scratch_.bytes() +
+           cost_.bytes() + depth_.bytes() + near_order_.bytes() + near_start_.bytes() +
+           keys_.bytes() + start_.bytes() + order_.bytes() + scratch_.bytes() +
            (coupling_ ? coupling_->bytes() : 0);
   }
 
@@ -540,6 +541,20 @@ class SphStage final : public FluidStage {
       const auto inv = inv_.view();
       for_each(
           Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) { inv[slot[i]] = i; });
+      // The owned fluid particles no ghost is near, then those near ghosts, each in this order
+      // (over_fluid's lists; the ghosts last): a pass over one kind runs full warps, where a
+      // test per particle left the warps on the border between the kinds half idle in both
+      // passes (~40 % of a rank's warps in a two-rank dam break).
+      const auto depth = depth_.cview();
+      const std::int64_t nown = n_own_;
+      for_each(
+          Exec{}, nf_, QDEMSPH_LAMBDA(std::int64_t i) {
+            k[i] = slot[i] >= nown ? 2 : depth[slot[i]] == 0 ? 1 : 0;
+          });
+      if (near_order_.size() != nf_) near_order_.resize(nf_);
+      if (near_start_.size() != 4) near_start_.resize(4);
+      sort_by_key(Exec{}, View<const std::int64_t>{keys_.cview().p, nf_}, 3, near_start_.view(),
+                  near_order_.view(), scratch_);
     }
   }
   template <class T>
@@ -707,25 +722,31 @@ class SphStage final : public FluidStage {
         0.0));
   }
 
-  // Which owned particles a pass runs over (over_owned): all, or, distributed, those near
-  // ghosts (their band cell's depth is 0: another rank's particle may come within the kernel
-  // support while the layout stands, FluidExchange::depth()) or the others, which read no
-  // ghost (the passes over them run while ghost values travel).
-  enum class Near { kAny, kGhosts, kNoGhost };
-
-  // body(i) for the owned particles i of [first, first + n) that `near` names.
+  // body(i) for the owned particles i of [first, first + n).
   template <class Body, int N = 1, int T = 256>
-  void over_owned(Near near, std::int64_t first, std::int64_t n, const Body& body,
+  void over_owned(std::int64_t first, std::int64_t n, const Body& body,
                   MinBlocks<N, T> launch = {}) {
     const auto slot = slot_.cview();
-    const auto depth = depth_.cview();
     const std::int64_t nown = n_own_;
-    const bool any = near == Near::kAny, ghosts = near == Near::kGhosts;
     for_each(
         Exec{}, n,
         QDEMSPH_LAMBDA(std::int64_t q) {
-          const std::int64_t i = first + q, s = slot[i];
-          if (s < nown && (any || (depth[s] == 0) == ghosts)) body(i);
+          if (slot[first + q] < nown) body(first + q);
+        },
+        launch);
+  }
+  // Distributed: body(i) for the owned fluid particles i near ghosts (their band cell's depth
+  // is 0: another rank's particle may come within the kernel support while the layout stands,
+  // FluidExchange::depth()), or for the others, which read no ghost (the passes over them run
+  // while ghost values travel); from the lists of the last sort.
+  template <class Body, int N = 1, int T = 256>
+  void over_fluid(bool near_ghosts, const Body& body, MinBlocks<N, T> launch = {}) {
+    const auto order = near_order_.cview();
+    const std::int64_t* start = near_start_.cview().p + (near_ghosts ? 1 : 0);
+    for_each(
+        Exec{}, nf_,
+        QDEMSPH_LAMBDA(std::int64_t q) {
+          if (q < start[1] - start[0]) body(order[start[0] + q]);
         },
         launch);
   }
@@ -740,7 +761,7 @@ class SphStage final : public FluidStage {
   };
 
   // Distributed: the ghosts' entries of columns f from their owners, in two halves: work
-  // queued between them reads no ghost entry of f (over_owned's kNoGhost) and runs while the
+  // queued between them reads no ghost entry of f (over_fluid(false)) and runs while the
   // records travel. start_refresh packs the records (one double per column; column c of owned
   // particle i's is record(i, c)) where the arrays live, a GPU stage copying only the records
   // between device and host, and posts those staged through the host; device-resident ones
@@ -916,6 +937,9 @@ class SphStage final : public FluidStage {
   Vec3Buffer x0_{S};         // distributed: owned positions at the last redistribute(), by slot
   Buffer<double> reach_{S};  // distributed: how far each may move from there (FluidExchange)
   Buffer<std::uint8_t> depth_{S};  // distributed: its band cell's depth, by slot (FluidExchange)
+  // Distributed: the owned fluid particles no ghost is near, then those near ghosts, then the
+  // ghosts, and where each kind starts (the last sort's order: over_fluid).
+  Buffer<std::int64_t> near_order_{S}, near_start_{S};
   DeviceMark packed_;              // distributed, on a GPU: a refresh's records are packed
   Buffer<double> pr_{S};     // p / rho^2 of this step (set after the sort, not carried over)
   Buffer<std::uint8_t> type_{S}, tmpt_{S};
