@@ -703,10 +703,10 @@ class SphStage final : public FluidStage {
 
   // Distributed: the ghosts' entries of the given columns from their owners. Records (one
   // double per column) are packed and unpacked where the arrays live; a GPU stage copies only
-  // the records between device and host. The pack is queued behind the pass before and the
-  // step's next kernels behind the unpack, with no wait between (the host waits for the pack
-  // once, outside "sph.halo", which times the exchange alone).
+  // the records between device and host.
   void refresh_ghosts(const GhostColumns f) {
+    exec_sync(Exec{});  // the pass before is the step's, not the refresh's (its copy waits anyway)
+    auto scope = timers_.scope("sph.halo");
     const std::int64_t ns = send_.size(), ng = n_ - n_own_, nown = n_own_;
     const int w = f.n;
     const auto at = inv_.cview();
@@ -726,14 +726,11 @@ class SphStage final : public FluidStage {
           for (int c = 0; c < w; ++c) pk[w * k + c] = f.c[c][i];
         });
     if (where != S) space_copy(out.data(), where, pk, S, out.size());
-    exec_sync(Exec{});  // the pass before and the pack: the step's, not the exchange's
     std::span<const std::byte> in;
     {
-      auto s = timers_.launch("sph.halo");
-      auto s1 = timers_.launch("sph.halo.mpi");
+      auto s1 = timers_.scope("sph.halo.mpi");
       in = ex_->refresh();
     }
-    auto s = timers_.launch("sph.halo");  // the unpack's launch
     const double* rv = reinterpret_cast<const double*>(in.data());
     if (where != S) {
       space_copy(pack_.view().p, S, in.data(), where, in.size());
@@ -875,12 +872,12 @@ class SphStage final : public FluidStage {
   std::unique_ptr<SolidCoupling<Exec>> coupling_;  // null without bodies
   std::unique_ptr<FluidExchange> ex_;              // null on one rank
   // Distributed: the layout's upkeep inside compute(), device work included: "sph.halo" (the
-  // skin test and the ghost refreshes' exchanges, their pack and unpack kernels not waited for;
-  // of it "sph.halo.skin" the test, "sph.halo.mpi" the messages of the refreshes, without the
-  // copies of host-staged records), "sph.rebuild" (redistribute(): migration and the new ghost
-  // layout, after a load_state too), "sph.setup" (the first layout, in the constructor: not a
-  // step's); each scope starts after a synchronisation, so the passes' device work is not
-  // counted in it. One rank times nothing here (no synchronisation added).
+  // skin test and the ghost refreshes; of it "sph.halo.skin" the test, "sph.halo.mpi" the
+  // messages of the refreshes, without packing and copies), "sph.rebuild" (redistribute():
+  // migration and the new ghost layout, after a load_state too), "sph.setup" (the first
+  // layout, in the constructor: not a step's); each scope starts after a synchronisation, so the
+  // passes' device work is not counted in it. One rank times nothing here (no
+  // synchronisation added).
   PhaseTimers timers_{[] { exec_sync(Exec{}); }};
 };
 
