@@ -588,8 +588,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     r.rebalances = rebalances_;
     r.rebuilds = rebuilds_;
     r.contact_slack = slack_;
-    r.imbalance = last_imbalance_;
-    r.imbalance_modelled = last_modelled_;
+    r.imbalance = last_.imbalance;
+    r.imbalance_modelled = last_.modelled;
     r.imbalance_initial = imbalance_initial_;
     r.rebalance_log = log_;
     r.rebuild_log = rebuild_log_;
@@ -1003,7 +1003,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
       rebuild = m > slack_;
     }
     if (dynamic && steps_ % opt_.rebalance_every == 0) {
-      const Window w = measure_window();
+      const Window& w = measure_window();
       rebalance = np_ > 1 && recut_due(w.imbalance, w.modelled, opt_.rebalance_threshold,
                                        w.busiest_step_s, opt_.rebalance_every, w.rebuild_s);
     }
@@ -1044,7 +1044,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
         e.parts[k] = v - seconds_of(parts0, k.c_str());
     if (rebalance) {
       ++rebalances_;
-      log_.push_back({steps_, last_imbalance_, predicted_after_, migrated_bytes_ - before});
+      log_.push_back({steps_, last_.imbalance, predicted_after_, migrated_bytes_ - before});
       pending_after_ = true;
     }
     return true;
@@ -1082,8 +1082,9 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   };
 
   // Busy time of each rank since the last window: the imbalance, the time per item that
-  // weights the cost of the next partition, and the current cut's imbalance at those weights.
-  Window measure_window() {
+  // weights the cost of the next partition, and the current cut's imbalance at those weights
+  // (kept in last_ for the record).
+  const Window& measure_window() {
     const double contact = local_contact_seconds();
     const double te = seconds("elements") - contact, ti = seconds("integration");
     const double busy = te + ti + contact;
@@ -1110,15 +1111,15 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     double cost = w_.cost(L_.n_owned, home, n_contact_owned_);
     MPI_Allreduce(MPI_IN_PLACE, &cost, 1, MPI_DOUBLE, MPI_MAX, comm_);
     const double mean_cost = w_.cost(w[5], w[7], w[6]) / np_;
-    last_modelled_ = mean_cost > 0 ? cost / mean_cost - 1 : 0.0;
+    const double modelled = mean_cost > 0 ? cost / mean_cost - 1 : 0.0;
     if (windows_++ == 0) imbalance_initial_ = imb;
     if (pending_after_) {
       log_.back().imbalance_after = imb;
       pending_after_ = false;
     }
-    last_imbalance_ = imb;
     window_start_ = steps_;
-    return {imb, n > 0 ? mx[0] / static_cast<double>(n) : 0.0, mx[1], last_modelled_};
+    last_ = {imb, n > 0 ? mx[0] / static_cast<double>(n) : 0.0, mx[1], modelled};
+    return last_;
   }
 
   // body_rank_ from owner_: a body per thread at a time.
@@ -1720,8 +1721,8 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
   Weights w_;
   double mark_[4] = {0, 0, 0, 0};
   std::int64_t steps_ = 0, window_start_ = 0, windows_ = 0, rebuilds_ = 0, rebalances_ = 0;
-  double last_imbalance_ = 0, imbalance_initial_ = 0, predicted_after_ = 0;
-  double last_modelled_ = 0;  // the last window's Window::modelled
+  double imbalance_initial_ = 0, predicted_after_ = 0;
+  Window last_;  // the last window's measurement
   bool pending_after_ = false;
   std::vector<RebalanceEntry> log_;
   std::vector<RebuildEntry> rebuild_log_;
