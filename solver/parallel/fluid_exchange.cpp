@@ -206,6 +206,7 @@ class MpiFluidExchange final : public FluidExchange {
   bool wants_load() const override { return every_ > 0 && (steps_ + 1) % every_ == 0; }
   double skin() const override { return skin_; }
   const std::vector<double>& reach() const override { return reach_; }
+  const std::vector<std::uint8_t>& depth() const override { return depth_; }
 
   const std::vector<std::int64_t>& send_slots() const override {
     return halo_->engine().send_index();
@@ -214,8 +215,9 @@ class MpiFluidExchange final : public FluidExchange {
     return halo_->engine().packed_send_buffer(stride);
   }
   Space buffer_space() const override { return halo_->engine().packed_space(); }
-  std::span<const std::byte> refresh() override {
-    halo_->engine().begin_packed();
+  void mark_packed() override { halo_->engine().mark_packed(); }
+  void begin_refresh() override { halo_->engine().begin_packed(); }
+  std::span<const std::byte> finish_refresh() override {
     const auto in = halo_->engine().finish_packed();
     halo_bytes_ += halo_->engine().last_bytes();
     return in;

@@ -46,6 +46,11 @@ struct TaitEos {
     const double p = B * (r4 * r2 * r - 1.0);
     return p > p_min ? p : p_min;
   }
+  // The density after dt at the rate drho_dt, floored at rho_min (the tension cut-off).
+  QDEMSPH_HD double next_density(double rho, double drho_dt, double dt) const {
+    const double r = rho + dt * drho_dt;
+    return r > rho_min ? r : rho_min;
+  }
   QDEMSPH_HD double density(double p) const {
     const double s = 1.0 + p / B;
     return rho0 * pow(s > 1e-6 ? s : 1e-6, 1.0 / gamma);

@@ -83,16 +83,25 @@ class FluidExchange {
   // layout stands (skin() / 2 where another rank's particles are within the ghost band, more
   // where none is for several band cells around).
   virtual const std::vector<double>& reach() const = 0;
+  // Per owned layout slot of the last distribute(): the depth of its band cell in this rank's
+  // piece, 0 where another rank's particle may come within the kernel support while the layout
+  // stands (every send_slots() entry is such a slot); elsewhere no ghost comes that near.
+  virtual const std::vector<std::uint8_t>& depth() const = 0;
   // Owned values -> ghost slots of the layout distribute() returned, in records the caller
   // packs where its arrays live (a GPU stage on the device): fill send_buffer(stride) with
   // one record of `stride` bytes per entry of send_slots() (owned layout slots; they stand
-  // until the next distribute()), then refresh() returns the records received, the k-th for
-  // the ghost in layout slot n_owned + k. Both buffers are in buffer_space(): host memory, or
+  // until the next distribute()), then begin_refresh() and finish_refresh(), which returns the
+  // records received, the k-th for the ghost in layout slot n_owned + k. Work queued between
+  // the two runs while the records travel. Both buffers are in buffer_space(): host memory, or
   // a GPU stage's device memory when the ranks' GPUs share a node (records of at most 6
-  // doubles; parallel/comm_plan.hpp, CommEngine::use_device). Collective.
+  // doubles; parallel/comm_plan.hpp, CommEngine::use_device). There, mark_packed() after
+  // queueing the pack makes begin_refresh() wait for the device work queued up to it only.
+  // Collective.
   virtual const std::vector<std::int64_t>& send_slots() const = 0;
   virtual std::span<std::byte> send_buffer(std::size_t stride) = 0;
-  virtual std::span<const std::byte> refresh() = 0;
+  virtual void mark_packed() = 0;
+  virtual void begin_refresh() = 0;
+  virtual std::span<const std::byte> finish_refresh() = 0;
   virtual Space buffer_space() const = 0;
   // Reductions over the ranks, the same result on every rank. Collective.
   virtual void sum(std::span<double> v) = 0;

@@ -12,7 +12,8 @@
 // one kernel support + skin; every loop skips ghosts, whose values come from their owners: x, v
 // at each compute() (all fields when the layout is rebuilt: fluid_exchange.hpp, keep()), rho,
 // p, m after the density and after the wall pressure pass; those refreshes pack and unpack
-// the ghost records where the arrays live (refresh_ghosts).
+// the ghost records where the arrays live (start_refresh, finish_refresh), and the passes over
+// the particles no ghost is near run while they travel (over_fluid).
 // Wall particles are fixed; markers move with the bodies (sph/solid_coupling.hpp); the p and rho
 // of both come from the fluid by Adami extrapolation.
 //
@@ -234,38 +235,55 @@ class SphStage final : public FluidStage {
     // Density rate at the drifted positions and half-step velocities (continuity + delta-SPH),
     // then rho_{n+1} = rho_n + dt drho: the pressure is taken at the same time as the positions
     // (a density lagging half a step behind the positions makes the acoustic modes grow).
-    for_each(
-        Exec{}, nf,
-        QDEMSPH_LAMBDA(std::int64_t i) {
-          if (slot[i] >= nown) return;
-          const PairState si{x[i], v[i], rho[i], m[i], 0.0};
-          double dr = 0;
-          std::int64_t visited = 0;
-          const double s2 = P.kernel.support2;
-          sph_for_each_near<kGroupFluid, kSphGroups>(g, start, si.x, [&](std::int64_t j, int zz) {
-            ++visited;
-            const Vec3 xj = g.image(x[j], zz);
-            const double r2 = norm2(si.x - xj);  // 0: i itself (not its periodic images)
-            if (r2 == 0 || r2 >= s2) return;     // most candidates: no further loads
-            const PairState sj{xj, v[j], rho[j], m[j], 0.0};
-            dr += sph_density_rate(P, si, sj, j < nf);
-          });
-          drho[i] = dr;
-          if (cost) cost[i] = 2.0 * visited;
-        },
-        kSphPassLaunch);
+    const auto density_rate = QDEMSPH_LAMBDA(std::int64_t i) {
+      const PairState si{x[i], v[i], rho[i], m[i], 0.0};
+      double dr = 0;
+      std::int64_t visited = 0;
+      const double s2 = P.kernel.support2;
+      sph_for_each_near<kGroupFluid, kSphGroups>(g, start, si.x, [&](std::int64_t j, int zz) {
+        ++visited;
+        const Vec3 xj = g.image(x[j], zz);
+        const double r2 = norm2(si.x - xj);  // 0: i itself (not its periodic images)
+        if (r2 == 0 || r2 >= s2) return;     // most candidates: no further loads
+        const PairState sj{xj, v[j], rho[j], m[j], 0.0};
+        dr += sph_density_rate(P, si, sj, j < nf);
+      });
+      drho[i] = dr;
+      if (cost) cost[i] = 2.0 * visited;
+    };
+    const auto pr = pr_.view();
+    // Distributed, the records on the GPUs: the passes over particles near ghosts on the side
+    // stream, beside those over the others (its blocks first; neither launch drains alone).
+    const bool side = ex_ && ex_->buffer_space() == Space::Cuda;
+    if (ex_) {
+      // The particles near ghosts first; then the ghosts' new rho, p (the equation of state
+      // applied to the records: rho itself is read until the pass ends) and m travel while
+      // the others run.
+      const GhostColumns c = pressure_columns();
+      {
+        SideQueue q(side);
+        over_fluid(true, density_rate, kSphPassLaunch);
+        start_refresh(
+            c, QDEMSPH_LAMBDA(std::int64_t i, int k) {
+              const double r = i < nf ? P.eos.next_density(rho[i], drho[i], ddt) : rho[i];
+              return k == 0 ? r : k == 1 ? (i < nf ? P.eos.pressure(r) : p[i]) : m[i];
+            });
+      }
+      over_fluid(false, density_rate, kSphPassLaunch);
+      finish_refresh(c);  // the side stream's work is done: its records were waited for
+      ghost_pressure_terms();
+    } else {
+      over_owned(0, nf, density_rate, kSphPassLaunch);
+    }
     // Equation of state (fluid), density floored at the tension cut-off (sph_eos.hpp); the
     // pair term p / rho^2 of every particle once (sph_pair.hpp).
-    const auto pr = pr_.view();
     for_each(
         Exec{}, nf, QDEMSPH_LAMBDA(std::int64_t i) {
           if (slot[i] >= nown) return;
-          const double r = rho[i] + ddt * drho[i];
-          rho[i] = r > P.eos.rho_min ? r : P.eos.rho_min;
+          rho[i] = P.eos.next_density(rho[i], drho[i], ddt);
           p[i] = P.eos.pressure(rho[i]);
           pr[i] = p[i] / (rho[i] * rho[i]);
         });
-    if (ex_) refresh_pressure();
     // Wall and marker pressure and density by extrapolation from the fluid (Adami, with gravity
     // only: solid_coupling.hpp says why a body's acceleration is left out). Mass rho V with the
     // particle's volume: dx^3 for walls, the body lattice cell for markers.
@@ -274,48 +292,58 @@ class SphStage final : public FluidStage {
       const std::uint64_t g0 = coupling_ ? coupling_->gid0() : 0;
       const auto mvol = coupling_ ? coupling_->volume() : View<const double>{};
       const std::int64_t nm = nml_;
-      for_each(
-          Exec{}, n_ - nf, QDEMSPH_LAMBDA(std::int64_t q) {
-            const std::int64_t i = nf + q;
-            if (slot[i] >= nown) return;
-            const Vec3 xi = x[i];
-            AdamiSum s;
-            std::int64_t visited = 0;
-            sph_for_each_near<kGroupFluid, kGroupFluid + 1>(
-                g, start, xi, [&](std::int64_t j, int zz) {
-                  ++visited;
-                  adami_add(s, P.kernel, xi, g.image(x[j], zz), p[j], rho[j]);
-                });
-            if (cost) cost[i] = (q < nm ? 2.0 : 1.0) * visited;
-            const double pw = adami_pressure(s, P.gravity, Vec3{});
-            p[i] = pw;
-            rho[i] = P.eos.density(pw);
-            pr[i] = pw / (rho[i] * rho[i]);
-            m[i] = rho[i] * (q < nm ? mvol[gid[i] - g0] : wall_volume);
-          });
+      over_owned(nf, n_ - nf, QDEMSPH_LAMBDA(std::int64_t i) {
+        const std::int64_t q = i - nf;
+        const Vec3 xi = x[i];
+        AdamiSum s;
+        std::int64_t visited = 0;
+        sph_for_each_near<kGroupFluid, kGroupFluid + 1>(g, start, xi, [&](std::int64_t j, int zz) {
+          ++visited;
+          adami_add(s, P.kernel, xi, g.image(x[j], zz), p[j], rho[j]);
+        });
+        if (cost) cost[i] = (q < nm ? 2.0 : 1.0) * visited;
+        const double pw = adami_pressure(s, P.gravity, Vec3{});
+        p[i] = pw;
+        rho[i] = P.eos.density(pw);
+        pr[i] = pw / (rho[i] * rho[i]);
+        m[i] = rho[i] * (q < nm ? mvol[gid[i] - g0] : wall_volume);
+      });
     }
-    if (ex_) refresh_pressure();
-    // Pair sums: acceleration of fluid particles.
+    // Pair sums: acceleration of fluid particles. Distributed: the ghost walls' p, rho, m
+    // travel while the particles with no ghost near run, then the others.
     const auto a = a_.view();
     const bool wall_visc = P.wall_viscosity;
-    for_each(
-        Exec{}, nf,
-        QDEMSPH_LAMBDA(std::int64_t i) {
-          if (slot[i] >= nown) return;
-          const PairState si{x[i], v[i], rho[i], m[i], pr[i]};
-          Vec3 f{};
-          const double s2 = P.kernel.support2;
-          sph_for_each_near<kGroupFluid, kSphGroups>(g, start, si.x, [&](std::int64_t j, int zz) {
-            const Vec3 xj = g.image(x[j], zz);
-            const double r2 = norm2(si.x - xj);
-            if (r2 == 0 || r2 >= s2) return;
-            const PairState sj{xj, v[j], rho[j], m[j], pr[j]};
-            f +=
-                j < nf ? sph_pair_force(P, si, sj, true) : sph_boundary_force(P, si, sj, wall_visc);
-          });
-          a.set(i, P.gravity + f / si.m);
-        },
-        kSphPassLaunch);
+    const auto force = QDEMSPH_LAMBDA(std::int64_t i) {
+      const PairState si{x[i], v[i], rho[i], m[i], pr[i]};
+      Vec3 f{};
+      const double s2 = P.kernel.support2;
+      sph_for_each_near<kGroupFluid, kSphGroups>(g, start, si.x, [&](std::int64_t j, int zz) {
+        const Vec3 xj = g.image(x[j], zz);
+        const double r2 = norm2(si.x - xj);
+        if (r2 == 0 || r2 >= s2) return;
+        const PairState sj{xj, v[j], rho[j], m[j], pr[j]};
+        f += j < nf ? sph_pair_force(P, si, sj, true) : sph_boundary_force(P, si, sj, wall_visc);
+      });
+      a.set(i, P.gravity + f / si.m);
+    };
+    if (ex_) {
+      const GhostColumns c = pressure_columns();
+      {
+        SideQueue q(side);
+        start_refresh(c, QDEMSPH_LAMBDA(std::int64_t i, int k) { return c.c[k][i]; });
+      }
+      over_fluid(false, force, kSphPassLaunch);
+      {
+        SideQueue q(side, &packed_);
+        finish_refresh(c);
+        ghost_pressure_terms();
+        over_fluid(true, force, kSphPassLaunch);
+        if (side) forces_.record();
+      }
+      if (side) forces_.follow();
+    } else {
+      over_owned(0, nf, force, kSphPassLaunch);
+    }
     if (coupling_) {
       // The fluid's force on each marker: the exact negative of each pair force the marker
       // exerts on the fluid (sph_pair.hpp), so the coupling conserves momentum. Distributed:
@@ -482,7 +510,8 @@ class SphStage final : public FluidStage {
            pr_.bytes() + m_.bytes() + x0_.bytes() + reach_.bytes() + type_.bytes() + gid_.bytes() +
            key_.bytes() + slot_.bytes() + tmp3_.bytes() + tmpd_.bytes() + tmpu_.bytes() +
            tmpt_.bytes() + tmpi_.bytes() + send_.bytes() + inv_.bytes() + pack_.bytes() +
-           cost_.bytes() + keys_.bytes() + start_.bytes() + order_.bytes() + scratch_.bytes() +
+           cost_.bytes() + depth_.bytes() + near_order_.bytes() + near_start_.bytes() +
+           keys_.bytes() + start_.bytes() + order_.bytes() + scratch_.bytes() +
            (coupling_ ? coupling_->bytes() : 0);
   }
 
@@ -526,6 +555,20 @@ class SphStage final : public FluidStage {
       const auto inv = inv_.view();
       for_each(
           Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) { inv[slot[i]] = i; });
+      // The owned fluid particles no ghost is near, then those near ghosts, each in this order
+      // (over_fluid's lists; the ghosts last): a pass over one kind runs full warps, where a
+      // test per particle left the warps on the border between the kinds half idle in both
+      // passes (~40 % of a rank's warps in a two-rank dam break).
+      const auto depth = depth_.cview();
+      const std::int64_t nown = n_own_;
+      for_each(
+          Exec{}, nf_, QDEMSPH_LAMBDA(std::int64_t i) {
+            k[i] = slot[i] >= nown ? 2 : depth[slot[i]] == 0 ? 1 : 0;
+          });
+      if (near_order_.size() != nf_) near_order_.resize(nf_);
+      if (near_start_.size() != 4) near_start_.resize(4);
+      sort_by_key(Exec{}, View<const std::int64_t>{keys_.cview().p, nf_}, 3, near_start_.view(),
+                  near_order_.view(), scratch_);
     }
   }
   template <class T>
@@ -659,6 +702,10 @@ class SphStage final : public FluidStage {
     slot_.assign(ord_);
     gather3(x0_, q.x, nown, nullptr);  // the owned positions by slot
     reach_.assign(reach);
+    depth_.assign(ex_->depth());
+    n_fluid_near_ = n_fluid_far_ = 0;  // the owned fluid particles near ghosts, and the others
+    for (std::int64_t k = 0; k < nown; ++k)
+      if (q.type[k] == kSphFluid) ++(ex_->depth()[k] == 0 ? n_fluid_near_ : n_fluid_far_);
     send_.assign(ex_->send_slots());
     inv_.resize(n_);
     cost_.resize(n_);
@@ -692,6 +739,31 @@ class SphStage final : public FluidStage {
         0.0));
   }
 
+  // body(i) for the owned particles i of [first, first + n).
+  template <class Body, int N = 1, int T = 256>
+  void over_owned(std::int64_t first, std::int64_t n, const Body& body,
+                  MinBlocks<N, T> launch = {}) {
+    const auto slot = slot_.cview();
+    const std::int64_t nown = n_own_;
+    for_each(
+        Exec{}, n,
+        QDEMSPH_LAMBDA(std::int64_t q) {
+          if (slot[first + q] < nown) body(first + q);
+        },
+        launch);
+  }
+  // Distributed: body(i) for the owned fluid particles i near ghosts (their band cell's depth
+  // is 0: another rank's particle may come within the kernel support while the layout stands,
+  // FluidExchange::depth()), or for the others, which read no ghost (the passes over them run
+  // while ghost values travel); from the lists of the last sort.
+  template <class Body, int N = 1, int T = 256>
+  void over_fluid(bool near_ghosts, const Body& body, MinBlocks<N, T> launch = {}) {
+    const std::int64_t* order = near_order_.cview().p + (near_ghosts ? n_fluid_far_ : 0);
+    for_each(
+        Exec{}, near_ghosts ? n_fluid_near_ : n_fluid_far_,
+        QDEMSPH_LAMBDA(std::int64_t q) { body(order[q]); }, launch);
+  }
+
   // Component arrays of this rank's particles whose ghost entries a refresh sets.
   struct GhostColumns {
     static constexpr int kMax = 6;
@@ -701,13 +773,18 @@ class SphStage final : public FluidStage {
     void add(View<double> v) { c[n++] = v.p; }
   };
 
-  // Distributed: the ghosts' entries of the given columns from their owners. Records (one
-  // double per column) are packed and unpacked where the arrays live; a GPU stage copies only
-  // the records between device and host.
-  void refresh_ghosts(const GhostColumns f) {
-    exec_sync(Exec{});  // the pass before is the step's, not the refresh's (its copy waits anyway)
-    auto scope = timers_.scope("sph.halo");
-    const std::int64_t ns = send_.size(), ng = n_ - n_own_, nown = n_own_;
+  // Distributed: the ghosts' entries of columns f from their owners, in two halves: work
+  // queued between them reads no ghost entry of f (over_fluid(false)) and runs while the
+  // records travel. start_refresh packs the records (one double per column; column c of owned
+  // particle i's is record(i, c)) where the arrays live, a GPU stage copying only the records
+  // between device and host, and posts those staged through the host; device-resident ones
+  // are posted by finish_refresh, the exchange waiting for the pack only
+  // (FluidExchange::mark_packed), so on a GPU the work between runs beside the copies.
+  // finish_refresh unpacks the records into the ghosts. "sph.halo" times the host's wait for
+  // the exchange alone.
+  template <class Record>
+  void start_refresh(const GhostColumns f, const Record& record) {
+    const std::int64_t ns = send_.size(), ng = n_ - n_own_;
     const int w = f.n;
     const auto at = inv_.cview();
     const auto send = send_.cview();
@@ -723,13 +800,30 @@ class SphStage final : public FluidStage {
     for_each(
         Exec{}, ns, QDEMSPH_LAMBDA(std::int64_t k) {
           const std::int64_t i = at[send[k]];
-          for (int c = 0; c < w; ++c) pk[w * k + c] = f.c[c][i];
+          for (int c = 0; c < w; ++c) pk[w * k + c] = record(i, c);
         });
     if (where != S) space_copy(out.data(), where, pk, S, out.size());
+    if (where == Space::Host) {
+      auto s = timers_.launch("sph.halo");
+      auto s1 = timers_.launch("sph.halo.mpi");
+      ex_->begin_refresh();
+    } else {
+      ex_->mark_packed();
+      packed_.record();
+    }
+  }
+  void finish_refresh(const GhostColumns f) {
+    const std::int64_t ng = n_ - n_own_, nown = n_own_;
+    const int w = f.n;
+    const auto at = inv_.cview();
+    const Space where = ex_->buffer_space();
     std::span<const std::byte> in;
     {
-      auto s1 = timers_.scope("sph.halo.mpi");
-      in = ex_->refresh();
+      if (where != Space::Host) packed_.wait();  // the pack and the passes before: the step's
+      auto s = timers_.launch("sph.halo");
+      auto s1 = timers_.launch("sph.halo.mpi");
+      if (where != Space::Host) ex_->begin_refresh();
+      in = ex_->finish_refresh();
     }
     const double* rv = reinterpret_cast<const double*>(in.data());
     if (where != S) {
@@ -746,16 +840,19 @@ class SphStage final : public FluidStage {
     GhostColumns f;
     f.add(x_.view());
     f.add(v_.view());
-    refresh_ghosts(f);
+    start_refresh(f, QDEMSPH_LAMBDA(std::int64_t i, int c) { return f.c[c][i]; });
+    finish_refresh(f);
   }
-
-  // Distributed: rho, p, m of the ghosts from their owners; their p / rho^2 as the owners have it.
-  void refresh_pressure() {
+  // rho, p, m: the columns of the refreshes after the density and the wall pressure passes.
+  GhostColumns pressure_columns() {
     GhostColumns f;
     f.add(rho_.view());
     f.add(p_.view());
     f.add(m_.view());
-    refresh_ghosts(f);
+    return f;
+  }
+  // The ghosts' p / rho^2 from their refreshed p and rho, as the owners have it.
+  void ghost_pressure_terms() {
     const auto rho = rho_.cview(), p = p_.cview();
     const auto pr = pr_.view();
     const auto at = inv_.cview();
@@ -852,6 +949,13 @@ class SphStage final : public FluidStage {
   Buffer<double> rho_{S}, p_{S}, drho_{S}, m_{S}, tmpd_{S};
   Vec3Buffer x0_{S};         // distributed: owned positions at the last redistribute(), by slot
   Buffer<double> reach_{S};  // distributed: how far each may move from there (FluidExchange)
+  Buffer<std::uint8_t> depth_{S};  // distributed: its band cell's depth, by slot (FluidExchange)
+  // Distributed: the owned fluid particles no ghost is near, then those near ghosts, then the
+  // ghosts, in the last sort's order (over_fluid; near_start_: where each kind starts).
+  Buffer<std::int64_t> near_order_{S}, near_start_{S};
+  std::int64_t n_fluid_near_ = 0, n_fluid_far_ = 0;  // their counts, the layout's
+  DeviceMark packed_;              // distributed, on a GPU: a refresh's records are packed
+  DeviceMark forces_;              // distributed, on a GPU: the side stream's force pass is done
   Buffer<double> pr_{S};     // p / rho^2 of this step (set after the sort, not carried over)
   Buffer<std::uint8_t> type_{S}, tmpt_{S};
   Buffer<std::uint64_t> gid_{S}, key_{S}, tmpu_{S};
