@@ -76,8 +76,10 @@ class DeviceMark {
 // not wait for the side's work: a DeviceMark recorded inside says when it is done. The side stream
 // has the GPU's greatest priority: its blocks start before the default stream's waiting ones.
 // For short work that the step's next kernels do not read and other ranks wait for (a halo's
-// packing, the contact shares' compaction), off the default stream's path. `on` false, or no
-// CUDA: nothing changes. Not nested.
+// packing, the contact shares' compaction), off the default stream's path, and for a pass
+// split in two launches that should not drain one after the other (the SPH passes over
+// particles near ghosts, beside those over the others). `on` false, or no CUDA: nothing
+// changes. Not nested.
 class SideQueue {
  public:
   explicit SideQueue(bool on, const DeviceMark* from = nullptr);

@@ -54,14 +54,16 @@ gpu_tests() {
 # The packs: 92d07b5 (c64, the SPH code before); 86eb7d3 (ov: the passes over particles no
 # ghost is near run while the pressure refreshes travel, split by a test per particle;
 # rejected); 6e657c4 (ol: split by lists made at the sort; rejected, reverted by 14de646);
-# f45f64d (tr: the refreshes without the waits for the timers; no gain, reverted by e67e020).
-# The rejected packs' records were relabelled "+split-rejected" and "+waits-rejected" after
-# the calls (README).
+# f45f64d (tr: the refreshes without the waits for the timers; no gain, reverted by e67e020);
+# ce1dc5e (sd: ol with the passes near ghosts on the side stream; landed). The rejected packs'
+# records were relabelled "+split-rejected" and "+waits-rejected" after the calls (README).
+# Call 4 carried build-pack-fin (e67e020) for its tests only.
 packs() {
   wrapper c64 c64 92d07b5
   wrapper ov ov 86eb7d3
   wrapper ol ol 6e657c4
   wrapper tr tr f45f64d
+  wrapper sd sd ce1dc5e
 }
 
 # Call 1 (2 x H200): ov's tests; the two-GPU fluid.csv of c64 and ov compared; interleaved
@@ -116,6 +118,35 @@ call3() {
 call4() {
   gpu_tests fin 'Cuda*:Sph*:Fluid*' 'DistributedFluid.*:Distributed.GpuRanks*:HaloPlan.*'
   grep -a "fluid dam break on GPUs" $R/gputests_mpi.log
+}
+
+# Call 5 (2 x H200): sd (ce1dc5e: the split with lists, the passes near ghosts on the side
+# stream): its tests, the two-GPU fluid.csv against c64's, interleaved rounds at one and two GPUs.
+call5() {
+  packs
+  gpu_tests sd 'Cuda*:Sph*:Fluid*' 'DistributedFluid.*:Distributed.GpuRanks*:HaloPlan.*'
+  grep -a "fluid dam break on GPUs" $R/gputests_mpi.log
+  for w in c64 sd; do run D2_${w}_r1 dambreak-weak 2 $w - --keep; done
+  echo "cmp two-GPU fluid.csv c64 vs sd: $(cmp $R/D2_c64_r1/runs/*/fluid.csv $R/D2_sd_r1/runs/*/fluid.csv && echo identical)"
+  for w in c64 sd; do run D1_${w}_r1 dambreak-weak 1 $w 0; done
+  for r in 2 3 4 5; do
+    for w in c64 sd; do
+      run D1_${w}_r$r dambreak-weak 1 $w $(((r - 1) % NG))
+      run D2_${w}_r$r dambreak-weak 2 $w -
+    done
+  done
+}
+
+# Call 6 (4 x H200): the dam break at one, two and four GPUs, c64 and sd interleaved.
+call6() {
+  packs
+  for r in 1 2 3; do
+    for w in c64 sd; do
+      run D1_${w}_r$r dambreak-weak 1 $w $(((r - 1) % NG))
+      run D2_${w}_r$r dambreak-weak 2 $w -
+      run D4_${w}_r$r dambreak-weak 4 $w -
+    done
+  done
 }
 
 "$1"
