@@ -975,13 +975,14 @@ class SphStage final : public FluidStage {
   StagingBytes staging_;                           // a GPU stage's arrays copied out
   std::unique_ptr<SolidCoupling<Exec>> coupling_;  // null without bodies
   std::unique_ptr<FluidExchange> ex_;              // null on one rank
-  // Distributed: the layout's upkeep inside compute(), device work included: "sph.halo" (the
-  // skin test and the ghost refreshes; of it "sph.halo.skin" the test, "sph.halo.mpi" the
-  // messages of the refreshes, without packing and copies), "sph.rebuild" (redistribute():
-  // migration and the new ghost layout, after a load_state too), "sph.setup" (the first
-  // layout, in the constructor: not a step's); each scope starts after a synchronisation, so the
-  // passes' device work is not counted in it. One rank times nothing here (no
-  // synchronisation added).
+  // Distributed: the layout's upkeep inside compute(): "sph.halo" (the skin test and the host's
+  // part of the ghost refreshes; of it "sph.halo.skin" the test, "sph.halo.mpi" the refreshes'
+  // exchanges, without packing and unpacking; while a GPU runs the passes over particles no
+  // ghost is near, the time its host waits in an exchange counts here), "sph.rebuild"
+  // (redistribute(): migration and the new ghost layout, after a load_state too), "sph.setup"
+  // (the first layout, in the constructor: not a step's); each scope starts after the work
+  // before it is done, so the passes' device work queued earlier is not counted in it. One
+  // rank times nothing here (no synchronisation added).
   PhaseTimers timers_{[] { exec_sync(Exec{}); }};
 };
 
