@@ -1,60 +1,12 @@
 #!/bin/bash
 # The six device calls of this folder (README.md), as they ran: `bash calls.sh callN` in the
 # repository root of a device machine, with the packs of README's table carried as
-# build-pack-<pack>. Records under $OUT/rec, returned as $OUT/rec.tgz (no h5, xdmf, csv).
-set -u
-R=$OUT/rec
-mkdir -p $R
-nvidia-smi -L >$R/gpus.txt
-nproc >>$R/gpus.txt
-NG=$(nvidia-smi -L | wc -l)
-declare -A REV  # wrapper -> the revision its records carry
-
-# wrapper NAME PACK REVISION [BLOCK3 BLOCK2]: dev_w_NAME.sh runs the pack's qdemsph, with the
-# experiment hook's block sizes exported when given (exp_block_hook.patch; the blk pack only).
-wrapper() {
-  REV[$1]=$3
-  {
-    echo '#!/bin/bash'
-    [ $# -ge 5 ] && echo "export QDEMSPH_EXP_BLOCK3=$4 QDEMSPH_EXP_BLOCK2=$5"
-    echo "export LD_LIBRARY_PATH=$PWD/build-pack-$2/lib"
-    echo "exec $PWD/build-pack-$2/bin/qdemsph \"\$@\""
-  } >$PWD/dev_w_$1.sh
-  chmod +x $PWD/dev_w_$1.sh
-}
-
-# run NAME SWEEP RANKS WRAPPER GPU|- [run.py arguments]: one record; prints its step (ms) and
-# each rank's SPH phase (ms a step).
-run() {
-  local name=$1 sweep=$2 n=$3 w=$4 gpu=$5
-  shift 5
-  local env=""
-  [ "$gpu" != "-" ] && env="CUDA_VISIBLE_DEVICES=$gpu"
-  env $env QDEMSPH_REVISION="${REV[$w]}" python3 scaling/run.py $sweep --backend cuda --ranks $n \
-    --qdemsph $PWD/dev_w_$w.sh --out $R/$name "$@" >$R/$name.log 2>&1
-  echo "$name rc=$? $(python3 -c "
-import json, glob
-d = json.load(open(glob.glob('$R/$name/records/*.json')[0]))
-p = (d.get('parallel') or {}).get('phases_by_rank') or []
-print(round(d['step_s'] * 1e3, 4), [round((q.get('sph') or 0) / d['steps'] * 1e3, 3) for q in p])" 2>&1 | tail -1)"
-}
-
-# gpu_tests PACK LOCAL_FILTER: the pack's unit tests on one GPU, the distributed ones on two.
-gpu_tests() {
-  (
-    cd build-pack-$1 && export LD_LIBRARY_PATH=$PWD/lib
-    ./bin/qdemsph_tests --gtest_filter="$2" >$R/gputests_local.log 2>&1
-    echo "local tests rc=$? $(grep -aE 'PASSED|FAILED' $R/gputests_local.log | tail -2 | tr '\n' ' ')"
-    mpirun --allow-run-as-root -np 2 ./bin/qdemsph_mpi_tests \
-      --gtest_filter='Distributed.GpuRanks*:Distributed.SlackRebuilds*:HaloPlan.*' >$R/gputests_mpi.log 2>&1
-    echo "mpi tests rc=$? $(grep -aE 'PASSED|FAILED' $R/gputests_mpi.log | tail -2 | tr '\n' ' ')"
-  )
-  grep -a "cuda-vs-cpu" $R/gputests_local.log
-}
+# build-pack-<pack> (helpers: scaling/device_calls.sh).
+. scaling/device_calls.sh
 
 # Call 1: both hooks at 256, 128 and 64 threads a block; fluid.csv of the one-GPU runs compared.
 call1() {
-  for b in 256 128 64; do wrapper b$b blk d94fa87+exp-block-$b $b $b; done
+  for b in 256 128 64; do wrapper b$b blk d94fa87+exp-block-$b QDEMSPH_EXP_BLOCK3=$b QDEMSPH_EXP_BLOCK2=$b; done
   for r in 1 2 3; do
     for b in 256 128 64; do
       run D1_b${b}_r$r dambreak-weak 1 b$b $(((r - 1) % NG)) --keep
@@ -76,11 +28,11 @@ call1() {
 # Call 2: the tests of e4836c0 (b64); the SPH passes at 256 (base), 64 (b64) and 32 (x32); the
 # contact kernel at 256, 128 and 64.
 call2() {
-  wrapper base blk d94fa87+exp-block-base 256 256
+  wrapper base blk d94fa87+exp-block-base QDEMSPH_EXP_BLOCK3=256 QDEMSPH_EXP_BLOCK2=256
   wrapper b64 b64 e4836c0
-  wrapper x32 blk d94fa87+exp-block-x32 32 256
-  wrapper c128 blk d94fa87+exp-block-c128 256 128
-  wrapper c64 blk d94fa87+exp-block-c64 256 64
+  wrapper x32 blk d94fa87+exp-block-x32 QDEMSPH_EXP_BLOCK3=32 QDEMSPH_EXP_BLOCK2=256
+  wrapper c128 blk d94fa87+exp-block-c128 QDEMSPH_EXP_BLOCK3=256 QDEMSPH_EXP_BLOCK2=128
+  wrapper c64 blk d94fa87+exp-block-c64 QDEMSPH_EXP_BLOCK3=256 QDEMSPH_EXP_BLOCK2=64
   gpu_tests b64 'Cuda*:Sph*:Fluid*:Contact*:Memory*:LocalModel*'
   for r in 1 2 3 4; do
     for w in base b64 x32; do
@@ -177,6 +129,4 @@ call6() {
 }
 
 "$1"
-find $R \( -name '*.h5' -o -name '*.xdmf' -o -name '*.vtu' -o -name '*.csv' \) -delete
-tar czf $OUT/rec.tgz -C $OUT rec
-rm -rf $R
+finish_call
