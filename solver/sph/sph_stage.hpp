@@ -292,22 +292,24 @@ class SphStage final : public FluidStage {
       const std::uint64_t g0 = coupling_ ? coupling_->gid0() : 0;
       const auto mvol = coupling_ ? coupling_->volume() : View<const double>{};
       const std::int64_t nm = nml_;
-      over_owned(nf, n_ - nf, QDEMSPH_LAMBDA(std::int64_t i) {
-        const std::int64_t q = i - nf;
-        const Vec3 xi = x[i];
-        AdamiSum s;
-        std::int64_t visited = 0;
-        sph_for_each_near<kGroupFluid, kGroupFluid + 1>(g, start, xi, [&](std::int64_t j, int zz) {
-          ++visited;
-          adami_add(s, P.kernel, xi, g.image(x[j], zz), p[j], rho[j]);
-        });
-        if (cost) cost[i] = (q < nm ? 2.0 : 1.0) * visited;
-        const double pw = adami_pressure(s, P.gravity, Vec3{});
-        p[i] = pw;
-        rho[i] = P.eos.density(pw);
-        pr[i] = pw / (rho[i] * rho[i]);
-        m[i] = rho[i] * (q < nm ? mvol[gid[i] - g0] : wall_volume);
-      });
+      over_owned(
+          nf, n_ - nf, QDEMSPH_LAMBDA(std::int64_t i) {
+            const std::int64_t q = i - nf;
+            const Vec3 xi = x[i];
+            AdamiSum s;
+            std::int64_t visited = 0;
+            sph_for_each_near<kGroupFluid, kGroupFluid + 1>(
+                g, start, xi, [&](std::int64_t j, int zz) {
+                  ++visited;
+                  adami_add(s, P.kernel, xi, g.image(x[j], zz), p[j], rho[j]);
+                });
+            if (cost) cost[i] = (q < nm ? 2.0 : 1.0) * visited;
+            const double pw = adami_pressure(s, P.gravity, Vec3{});
+            p[i] = pw;
+            rho[i] = P.eos.density(pw);
+            pr[i] = pw / (rho[i] * rho[i]);
+            m[i] = rho[i] * (q < nm ? mvol[gid[i] - g0] : wall_volume);
+          });
     }
     // Pair sums: acceleration of fluid particles. Distributed: the ghost walls' p, rho, m
     // travel while the particles with no ghost near run, then the others.
@@ -330,7 +332,8 @@ class SphStage final : public FluidStage {
       const GhostColumns c = pressure_columns();
       {
         SideQueue q(side);
-        start_refresh(c, QDEMSPH_LAMBDA(std::int64_t i, int k) { return c.c[k][i]; });
+        start_refresh(
+            c, QDEMSPH_LAMBDA(std::int64_t i, int k) { return c.c[k][i]; });
       }
       over_fluid(false, force, kSphPassLaunch);
       {
@@ -840,7 +843,8 @@ class SphStage final : public FluidStage {
     GhostColumns f;
     f.add(x_.view());
     f.add(v_.view());
-    start_refresh(f, QDEMSPH_LAMBDA(std::int64_t i, int c) { return f.c[c][i]; });
+    start_refresh(
+        f, QDEMSPH_LAMBDA(std::int64_t i, int c) { return f.c[c][i]; });
     finish_refresh(f);
   }
   // rho, p, m: the columns of the refreshes after the density and the wall pressure passes.
@@ -954,9 +958,9 @@ class SphStage final : public FluidStage {
   // ghosts, in the last sort's order (over_fluid; near_start_: where each kind starts).
   Buffer<std::int64_t> near_order_{S}, near_start_{S};
   std::int64_t n_fluid_near_ = 0, n_fluid_far_ = 0;  // their counts, the layout's
-  DeviceMark packed_;              // distributed, on a GPU: a refresh's records are packed
-  DeviceMark forces_;              // distributed, on a GPU: the side stream's force pass is done
-  Buffer<double> pr_{S};     // p / rho^2 of this step (set after the sort, not carried over)
+  DeviceMark packed_;     // distributed, on a GPU: a refresh's records are packed
+  DeviceMark forces_;     // distributed, on a GPU: the side stream's force pass is done
+  Buffer<double> pr_{S};  // p / rho^2 of this step (set after the sort, not carried over)
   Buffer<std::uint8_t> type_{S}, tmpt_{S};
   Buffer<std::uint64_t> gid_{S}, key_{S}, tmpu_{S};
   Buffer<std::int64_t> slot_{S}, tmpi_{S};

@@ -67,7 +67,7 @@ TEST(SphEos, TaitPressureInverseAndSoundSpeed) {
   EXPECT_EQ(cut.rho_min, 1000.0);
   EXPECT_EQ(cut.pressure(990), 0.0);
   EXPECT_NEAR(TaitEos::make(1000, 20, -500).rho_min, e.density(-500), 1e-12);
-  EXPECT_EQ(cut.next_density(1000, 2000, 1e-3), 1002.0);  // rho + dt drho/dt
+  EXPECT_EQ(cut.next_density(1000, 2000, 1e-3), 1002.0);   // rho + dt drho/dt
   EXPECT_EQ(cut.next_density(1000, -2000, 1e-3), 1000.0);  // floored at rho_min
   EXPECT_NEAR(e.B, 20.0 * 20.0 * 1000 / 7, 1e-9);
   for (double rho : {990.0, 1000.0, 1003.0, 1010.0}) {

@@ -206,8 +206,8 @@ TEST(DistributedFluid, GpuRanksEqualOneGpuBitForBit) {
   const FluidSetup f = dam_setup();
   const bool root = rank_of() == 0;
   std::unique_ptr<FluidStage> ref = root ? make_fluid_stage("cuda", f) : nullptr;
-  auto dist = make_fluid_stage("cuda", f, nullptr,
-                               make_fluid_exchange(options(50, 0.0), f, Space::Cuda));
+  auto dist =
+      make_fluid_stage("cuda", f, nullptr, make_fluid_exchange(options(50, 0.0), f, Space::Cuda));
   StateDiff worst;
   constexpr int kSteps = 300;
   for (int n = 1; n <= kSteps; ++n) {
