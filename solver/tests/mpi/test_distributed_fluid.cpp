@@ -79,6 +79,11 @@ struct StateDiff {
   double x = 0, v = 0, a = 0, rho = 0, p = 0, m = 0;
   bool same_order = true;  // gid and type in the same order
   double max() const { return std::max({x, v, a, rho, p, m}); }
+  // Each field's difference the larger of this one's and d's.
+  void widen(const StateDiff& d) {
+    x = std::max(x, d.x), v = std::max(v, d.v), a = std::max(a, d.a);
+    rho = std::max(rho, d.rho), p = std::max(p, d.p), m = std::max(m, d.m);
+  }
 };
 
 StateDiff diff(const FluidState& a, const FluidState& b) {
@@ -170,9 +175,7 @@ TEST(DistributedFluid, DamBreakEqualsOneRankBitForBit) {
     const FluidState a = ref->save_state();
     const StateDiff d = diff(a, b);
     EXPECT_TRUE(d.same_order) << "step " << n;
-    worst.x = std::max(worst.x, d.x), worst.v = std::max(worst.v, d.v);
-    worst.a = std::max(worst.a, d.a), worst.rho = std::max(worst.rho, d.rho);
-    worst.p = std::max(worst.p, d.p), worst.m = std::max(worst.m, d.m);
+    worst.widen(d);
     const FluidStats sa = ref->stats();
     kinetic = std::max(kinetic, std::abs(sa.kinetic - sb.kinetic) / sa.kinetic);
     vmax = std::max(vmax, std::abs(sa.v_max - sb.v_max));
@@ -218,9 +221,7 @@ TEST(DistributedFluid, GpuRanksEqualOneGpuBitForBit) {
     if (!root) continue;
     const StateDiff d = diff(ref->save_state(), b);
     EXPECT_TRUE(d.same_order) << "step " << n;
-    worst.x = std::max(worst.x, d.x), worst.v = std::max(worst.v, d.v);
-    worst.a = std::max(worst.a, d.a), worst.rho = std::max(worst.rho, d.rho);
-    worst.p = std::max(worst.p, d.p), worst.m = std::max(worst.m, d.m);
+    worst.widen(d);
   }
   if (!root) return;
   std::printf("[fluid dam break on GPUs, %d ranks, %d steps] max |dx| = %.3e m, |drho| = %.3e\n",
@@ -297,9 +298,7 @@ TEST(DistributedFluid, CoupledDamBreakWithCubeEqualsOneRankBitForBit) {
     bad_ids += !each_id_once(b, f.size());
     const StateDiff d = diff(ref_fluid->save_state(), b);
     EXPECT_TRUE(d.same_order) << "step " << n;
-    worst.x = std::max(worst.x, d.x), worst.v = std::max(worst.v, d.v);
-    worst.a = std::max(worst.a, d.a), worst.rho = std::max(worst.rho, d.rho);
-    worst.p = std::max(worst.p, d.p), worst.m = std::max(worst.m, d.m);
+    worst.widen(d);
     const HostFields ha = ref_be->download(false);
     dx = std::max(dx, max_diff(ha.x, hb.x));
     dv = std::max(dv, max_diff(ha.v, hb.v));
@@ -626,9 +625,7 @@ TEST(DistributedFluid, PeriodicSlabEqualsOneRankBitForBit) {
       for (const Vec3& p : b.x) outside += p.z < f.z0 || p.z >= f.z0 + f.period_z;
       const StateDiff d = diff(ref->save_state(), b);
       EXPECT_TRUE(d.same_order) << "step " << n;
-      worst.x = std::max(worst.x, d.x), worst.v = std::max(worst.v, d.v);
-      worst.a = std::max(worst.a, d.a), worst.rho = std::max(worst.rho, d.rho);
-      worst.p = std::max(worst.p, d.p), worst.m = std::max(worst.m, d.m);
+      worst.widen(d);
     }
     const FluidTraffic t = x->traffic();
     if (root) {
