@@ -39,6 +39,19 @@ p = (d.get('parallel') or {}).get('phases_by_rank') or []
 print(round(d['step_s'] * 1e3, 4), [round((q.get('sph') or 0) / d['steps'] * 1e3, 3) for q in p])" 2>&1 | tail -1)"
 }
 
+# d12_rounds FROM TO WRAPPER...: rounds FROM..TO of the weak dam break at one GPU (GPU (round -
+# 1) mod GPUs) and two, the wrappers in the order given.
+d12_rounds() {
+  local from=$1 to=$2
+  shift 2
+  for r in $(seq $from $to); do
+    for w in "$@"; do
+      run D1_${w}_r$r dambreak-weak 1 $w $(((r - 1) % NG))
+      run D2_${w}_r$r dambreak-weak 2 $w -
+    done
+  done
+}
+
 # gpu_tests PACK LOCAL_FILTER [MPI_FILTER]: the pack's unit tests on one GPU, the distributed
 # ones on two.
 gpu_tests() {

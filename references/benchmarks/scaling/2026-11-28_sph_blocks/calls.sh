@@ -34,12 +34,7 @@ call2() {
   wrapper c128 blk d94fa87+exp-block-c128 QDEMSPH_EXP_BLOCK3=256 QDEMSPH_EXP_BLOCK2=128
   wrapper c64 blk d94fa87+exp-block-c64 QDEMSPH_EXP_BLOCK3=256 QDEMSPH_EXP_BLOCK2=64
   gpu_tests b64 'Cuda*:Sph*:Fluid*:Contact*:Memory*:LocalModel*'
-  for r in 1 2 3 4; do
-    for w in base b64 x32; do
-      run D1_${w}_r$r dambreak-weak 1 $w $(((r - 1) % NG))
-      run D2_${w}_r$r dambreak-weak 2 $w -
-    done
-  done
+  d12_rounds 1 4 base b64 x32
   for r in 1 2 3; do
     for w in base c128 c64; do run C1_${w}_r$r cubes-weak 1 $w $(((r - 1) % NG)); done
   done
@@ -81,12 +76,7 @@ print('$k summary energies+contact', 'identical' if same else 'DIFFER', a['energ
       done
     done
   done
-  for r in 1 2; do
-    for w in base c64; do
-      run D1_${w}_r$r dambreak-weak 1 $w $(((r - 1) % NG))
-      run D2_${w}_r$r dambreak-weak 2 $w -
-    done
-  done
+  d12_rounds 1 2 base c64
 }
 
 # Call 4 (4 x H200): the three cases at 1, 2 and 4 GPUs, two rounds.

@@ -28,12 +28,7 @@ rounds() {
   for w in c64 $x; do run D2_${w}_r1 dambreak-weak 2 $w - --keep; done
   echo "cmp two-GPU fluid.csv c64 vs $x: $(cmp $R/D2_c64_r1/runs/*/fluid.csv $R/D2_${x}_r1/runs/*/fluid.csv && echo identical)"
   for w in c64 $x; do run D1_${w}_r1 dambreak-weak 1 $w 0; done
-  for r in $(seq 2 $last); do
-    for w in $order; do
-      run D1_${w}_r$r dambreak-weak 1 $w $(((r - 1) % NG))
-      run D2_${w}_r$r dambreak-weak 2 $w -
-    done
-  done
+  d12_rounds 2 $last $order
 }
 
 # Call 1 (2 x H200): ov against c64, ov first in each round.
@@ -54,16 +49,11 @@ call3() {
   packs
   gpu_tests tr 'Cuda*:Sph*:Fluid*' 'DistributedFluid.*:Distributed.GpuRanks*:HaloPlan.*'
   grep -a "fluid dam break on GPUs" $R/gputests_mpi.log
-  for r in 1 2 3 4 5; do
-    for w in c64 tr; do
-      run D1_${w}_r$r dambreak-weak 1 $w $(((r - 1) % NG))
-      run D2_${w}_r$r dambreak-weak 2 $w -
-    done
-  done
+  d12_rounds 1 5 c64 tr
 }
 
-# Call 4 (2 x H200): the tests of the code that landed (fin: e67e020, 92d07b5's solver and the
-# new GPU test of the distributed fluid).
+# Call 4 (2 x H200): the tests of fin (e67e020: 92d07b5's solver and the new GPU test of the
+# distributed fluid).
 call4() {
   gpu_tests fin 'Cuda*:Sph*:Fluid*' 'DistributedFluid.*:Distributed.GpuRanks*:HaloPlan.*'
   grep -a "fluid dam break on GPUs" $R/gputests_mpi.log
