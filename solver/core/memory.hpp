@@ -256,6 +256,11 @@ class Vec3Buffer {
     y_.resize(n);
     z_.resize(n);
   }
+  void resize_for_overwrite(std::int64_t n) {
+    x_.resize_for_overwrite(n);
+    y_.resize_for_overwrite(n);
+    z_.resize_for_overwrite(n);
+  }
   void resize_keep(std::int64_t n) {
     x_.resize_keep(n);
     y_.resize_keep(n);
@@ -334,9 +339,12 @@ class IpcDeviceBytes {
   ~IpcDeviceBytes() { cuda_ipc_free(p_); }
   IpcDeviceBytes(const IpcDeviceBytes&) = delete;
   IpcDeviceBytes& operator=(const IpcDeviceBytes&) = delete;
-  void reserve(std::size_t n) {  // a growth takes 1/8 more room, as Buffer's does
+  // Room for 1/8 more from the first allocation: a growth makes every process that maps the
+  // bytes close and open them again (CommEngine), and a halo's next layout often holds a few
+  // more records.
+  void reserve(std::size_t n) {
     if (n <= cap_) return;
-    const std::size_t want = cap_ > 0 ? n + n / 8 : n;
+    const std::size_t want = n + n / 8;
     release();
     p_ = static_cast<std::byte*>(cuda_ipc_alloc(want));
     cap_ = want;

@@ -201,13 +201,20 @@ void CommEngine::drop_device() {
   device_ = false;
 }
 
-// replan() on device buffers: the senders' mappings stand unless some rank's send buffer must
-// grow (a new allocation: every rank drops its mappings first, so none outlives its buffer);
-// host staging again when a neighbour is off this node now.
+// replan() on device buffers: the senders' mappings stand but those of ranks whose send buffer
+// must grow (a new allocation: every rank closes its mapping of such a buffer first, so none
+// outlives it; the others are not opened again, cudaIpcOpenMemHandle being slow); host staging
+// again when a neighbour is off this node now.
 void CommEngine::remap_device() {
-  const bool grow = max_stride_ * n_send() > dsend_.capacity();
   if (!all_ranks(neighbours_on_node())) return drop_device();
-  if (!all_ranks(!grow)) unmap_peers();
+  int grow = max_stride_ * n_send() > dsend_.capacity();
+  std::vector<int> grows(size_);
+  MPI_Allgather(&grow, 1, MPI_INT, grows.data(), 1, MPI_INT, comm_);
+  if (std::find(grows.begin(), grows.end(), 1) != grows.end()) {
+    for (int r = 0; r < size_; ++r)
+      if (grows[r] && peer_[r]) cuda_ipc_close(peer_[r]), peer_[r] = nullptr;
+    MPI_Barrier(comm_);
+  }
   if (!all_ranks(map_peers())) drop_device();
 }
 

@@ -169,17 +169,21 @@ class MpiFluidExchange final : public FluidExchange {
     part.emplace(timers, "sph.rebuild.ghosts");
     find_ghost_ranks(p.x, nown);
     part.emplace(timers, "sph.rebuild.halo");
+    std::optional<PhaseTimers::Scope> sub;
+    sub.emplace(timers, "sph.rebuild.halo.plan");
     if (halo_) {  // ids go as a field
       halo_->replan(nown, g_.off, g_.ranks);
     } else {
       halo_ = std::make_unique<HaloPlan>(comm_, nown, g_.off, g_.ranks);
       halo_->engine().use_device(space_ == Space::Cuda, 6 * sizeof(double));
     }
+    sub.emplace(timers, "sph.rebuild.halo.gather");
     resize(p, halo_->n_total());
     const auto f = fields_of(p);
     halo_->gather_begin(f);
     halo_->gather_finish(f);
     halo_bytes_ += halo_->engine().last_bytes();
+    sub.reset();
     part.reset();
     p.cost.clear();
     p.slot.clear();

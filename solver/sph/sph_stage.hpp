@@ -513,9 +513,9 @@ class SphStage final : public FluidStage {
            pr_.bytes() + m_.bytes() + x0_.bytes() + reach_.bytes() + type_.bytes() + gid_.bytes() +
            key_.bytes() + slot_.bytes() + tmp3_.bytes() + tmpd_.bytes() + tmpu_.bytes() +
            tmpt_.bytes() + tmpi_.bytes() + send_.bytes() + inv_.bytes() + pack_.bytes() +
-           cost_.bytes() + depth_.bytes() + near_order_.bytes() + near_start_.bytes() +
-           keys_.bytes() + start_.bytes() + order_.bytes() + scratch_.bytes() +
-           (coupling_ ? coupling_->bytes() : 0);
+           cost_.bytes() + picked_.bytes() + up_.bytes() + depth_.bytes() + near_order_.bytes() +
+           near_start_.bytes() + keys_.bytes() + start_.bytes() + order_.bytes() +
+           scratch_.bytes() + (coupling_ ? coupling_->bytes() : 0);
   }
 
   // Public only because nvcc's extended lambdas need an accessible enclosing function.
@@ -625,6 +625,8 @@ class SphStage final : public FluidStage {
     part.reset();
     const std::int64_t nown = ex_->distribute(q, timers_);
     part.emplace(timers_, "sph.rebuild.in");
+    std::optional<PhaseTimers::Scope> sub;
+    sub.emplace(timers_, "sph.rebuild.in.order");
     const std::int64_t n = static_cast<std::int64_t>(q.size());
     const std::uint64_t place = (std::uint64_t{1} << kSphKeyShift) - 1;
     // One pass over the particles, on the threads, for their extremes: of the positions each
@@ -674,36 +676,22 @@ class SphStage final : public FluidStage {
     radix_sort(by_key_, by_key_scratch_, n > 0 ? std::bit_width((b1 - b0 + 1) << pb) : 0);
     resize_for_overwrite(ord_, n);
     for_each(HostExec{}, n, [&](std::int64_t k) { ord_[k] = by_key_[k].second; });
-    // Each particle i in the order of the keys from layout slot ord[i], gathered on the host
-    // straight into the stage's arrays (a device's through page-locked staging: one upload of
-    // each field, already in order). Before, the fields went in in layout order and were
-    // permuted where they live (a second copy of each; on a device the Vec3 fields split into
-    // components and bounced through the page-locked chunks on the way): 6.4 -> 4.2 ms a
-    // rebuild of rank 0's ~200 k particles on one thread (the dam break of 359 k particles on 2
-    // ranks, 2-core VM, median of 3 runs).
-    const std::int64_t* ord = ord_.data();
-    const auto gather = [&](auto& b, const auto& h) {
-      write_on_host(b, n, staging_, [&](auto* out) {
-        for_each(HostExec{}, n, [&](std::int64_t i) { out[i] = h[ord[i]]; });
-      });
-    };
-    const auto gather3 = [&](Vec3Buffer& b, const std::vector<Vec3>& h, std::int64_t m,
-                             const std::int64_t* at) {
-      write_on_host(b, m, staging_, [&](double* out, int a) {
-        for_each(HostExec{}, m, [&](std::int64_t i) { out[i] = h[at ? at[i] : i][a]; });
-      });
-    };
+    // Each particle i in the order of the keys from layout slot ord[i] (slot_), gathered where
+    // the stage's arrays live (gather_layout()): a host stage's from q in place, a device's from
+    // q's fields uploaded as they are. Before, a device's were gathered on the host, one component
+    // at a time, into page-locked staging and uploaded in order: random reads of every field
+    // on the host threads.
+    sub.emplace(timers_, "sph.rebuild.in.fields");
     size_for(q.type);
     n_own_ = nown;
-    gather3(x_, q.x, n, ord);
-    gather3(v_, q.v, n, ord);
-    gather(rho_, q.rho);
-    gather(m_, q.m);
-    gather(type_, q.type);
-    gather(gid_, q.gid);
-    gather(key_, q.key);
     slot_.assign(ord_);
-    gather3(x0_, q.x, nown, nullptr);  // the owned positions by slot
+    gather_layout(x_, q.x, &x0_);  // and the owned positions by slot
+    gather_layout(v_, q.v);
+    gather_layout(rho_, q.rho);
+    gather_layout(m_, q.m);
+    gather_layout(type_, q.type);
+    gather_layout(gid_, q.gid);
+    gather_layout(key_, q.key);
     reach_.assign(reach);
     depth_.assign(ex_->depth());
     n_fluid_near_ = n_fluid_far_ = 0;  // the owned fluid particles near ghosts, and the others
@@ -868,44 +856,103 @@ class SphStage final : public FluidStage {
         });
   }
 
+  // b[i] = h[slot_[i]] for each of the n_ particles (redistribute()): on the host from h in
+  // place, on a device from h uploaded into up_ (one copy, bounced through page-locked chunks:
+  // memory_cuda.cu) and gathered there.
+  template <class T>
+  void gather_layout(Buffer<T>& b, const std::vector<T>& h) {
+    const T* src = readable(h);
+    const std::int64_t* ord = slot_.cview().p;
+    b.resize_for_overwrite(n_);
+    const auto dst = b.view();
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) { dst[i] = src[ord[i]]; });
+  }
+  // The same for 3-vectors; `by_slot` also gets the first n_own_ entries of h in their order.
+  void gather_layout(Vec3Buffer& b, const std::vector<Vec3>& h, Vec3Buffer* by_slot = nullptr) {
+    const Vec3* src = readable(h);
+    const std::int64_t* ord = slot_.cview().p;
+    b.resize_for_overwrite(n_);
+    const auto dst = b.view();
+    for_each(
+        Exec{}, n_, QDEMSPH_LAMBDA(std::int64_t i) { dst.set(i, src[ord[i]]); });
+    if (!by_slot) return;
+    by_slot->resize_for_overwrite(n_own_);
+    const auto own = by_slot->view();
+    for_each(
+        Exec{}, n_own_, QDEMSPH_LAMBDA(std::int64_t k) { own.set(k, src[k]); });
+  }
+  // h's entries where this stage's kernels read them: h itself on the host, else a copy in up_
+  // (valid until the next call).
+  template <class T>
+  const T* readable(const std::vector<T>& h) {
+    if constexpr (S == Space::Host) {
+      return h.data();
+    } else {
+      const std::size_t bytes = sizeof(T) * h.size();
+      up_.resize_for_overwrite(static_cast<std::int64_t>((bytes + 7) / 8));
+      if (bytes > 0) space_copy(up_.view().p, S, h.data(), Space::Host, bytes);
+      return reinterpret_cast<const T*>(up_.view().p);
+    }
+  }
+
+  // out = the owned particles' entries (pick_) of a local array, gathered where it lives: in
+  // place on the host; a device's into up_, then one download (bounced through page-locked
+  // chunks, memory_cuda.cu). Before, each device array came down whole, a component at a time,
+  // and was gathered on the host.
+  template <class T>
+  void take_owned(View<const T> v, std::vector<T>& out) {
+    T* at = owned_out(out);
+    const std::int64_t* pick = S == Space::Host ? pick_.data() : picked_.cview().p;
+    for_each(
+        Exec{}, static_cast<std::int64_t>(out.size()),
+        QDEMSPH_LAMBDA(std::int64_t k) { at[k] = v[pick[k]]; });
+    owned_down(out, at);
+  }
+  void take_owned(Vec3CView v, std::vector<Vec3>& out) {
+    Vec3* at = owned_out(out);
+    const std::int64_t* pick = S == Space::Host ? pick_.data() : picked_.cview().p;
+    for_each(
+        Exec{}, static_cast<std::int64_t>(out.size()),
+        QDEMSPH_LAMBDA(std::int64_t k) { at[k] = v[pick[k]]; });
+    owned_down(out, at);
+  }
+  // take_owned's target: out itself on the host, else up_.
+  template <class T>
+  T* owned_out(std::vector<T>& out) {
+    resize_for_overwrite(out, pick_.size());
+    if constexpr (S == Space::Host) {
+      return out.data();
+    } else {
+      up_.resize_for_overwrite(static_cast<std::int64_t>((sizeof(T) * out.size() + 7) / 8));
+      return reinterpret_cast<T*>(up_.view().p);
+    }
+  }
+  template <class T>
+  void owned_down(std::vector<T>& out, const T* at) {
+    if (S != Space::Host && !out.empty())
+      space_copy(out.data(), Space::Host, at, S, sizeof(T) * out.size());
+  }
+
  private:
-  // pick_ = the owned particles (slot < n_own_), in local order.
+  // pick_ = the owned particles (slot < n_own_), in local order; a device stage's also there
+  // (picked_).
   void pick_owned() {
-    const std::int64_t* slot = host_readable(slot_.cview().p, n_, 0);
+    const std::int64_t* slot = host_readable(slot_.cview().p, n_);
     const std::int64_t nown = n_own_;
     select_indices(
         HostExec{}, n_, [&](std::int64_t i) { return slot[i] < nown; }, pick_);
+    if constexpr (S != Space::Host) picked_.assign(pick_);
   }
-  // out = the owned particles' entries (pick_) of a local array: read in place on the host,
-  // through one host copy from a device.
+  // The n entries at p where the host reads them: p itself, or a host copy of a device array.
   template <class T>
-  void take_owned(View<const T> v, std::vector<T>& out) {
-    const T* h = host_readable(v.p, v.n, 0);
-    resize_for_overwrite(out, pick_.size());
-    for_each(HostExec{}, static_cast<std::int64_t>(pick_.size()),
-             [&](std::int64_t k) { out[k] = h[pick_[k]]; });
-  }
-  void take_owned(Vec3CView v, std::vector<Vec3>& out) {
-    const double* h[3] = {host_readable(v.x, v.n, 0), host_readable(v.y, v.n, 1),
-                          host_readable(v.z, v.n, 2)};
-    resize_for_overwrite(out, pick_.size());
-    for_each(HostExec{}, static_cast<std::int64_t>(pick_.size()), [&](std::int64_t k) {
-      const std::int64_t i = pick_[k];
-      out[k] = {h[0][i], h[1][i], h[2][i]};
-    });
-  }
-  // The n entries at p where the host reads them: p itself, or a host copy of a device array
-  // (part 0, 1 or 2 of the staging bytes, so that a Vec3's three components are there at once).
-  template <class T>
-  const T* host_readable(const T* p, std::int64_t n, int part) {
+  const T* host_readable(const T* p, std::int64_t n) {
     if constexpr (S == Space::Host) {
       return p;
     } else {
-      const std::size_t bytes = sizeof(T) * n, each = (bytes + 63) / 64 * 64;
-      if (staging_.size() < 3 * each) staging_.resize(3 * each);
-      std::byte* at = staging_.data() + part * each;
-      space_copy(at, Space::Host, p, S, bytes);
-      return reinterpret_cast<const T*>(at);
+      staging_.resize(sizeof(T) * n);
+      space_copy(staging_.data(), Space::Host, p, S, sizeof(T) * n);
+      return reinterpret_cast<const T*>(staging_.data());
     }
   }
 
@@ -968,15 +1015,19 @@ class SphStage final : public FluidStage {
   Buffer<std::int64_t> inv_{S};   // distributed: the particle in each layout slot (last sort)
   Buffer<double> pack_{S};        // distributed, on a device: the records sent and received
   Buffer<double> cost_{S};        // distributed: each particle's cost in the last compute()
-  CellGrid grid_all_;             // the whole fluid box
-  CellGrid grid_;                 // the cells searched: the whole box, or a rank's window of it
+  // Distributed, on a device: the owned particles (pick_), and a field of q on its way
+  // (take_owned(), gather_layout()).
+  Buffer<std::int64_t> picked_{S};
+  Buffer<double> up_{S};
+  CellGrid grid_all_;  // the whole fluid box
+  CellGrid grid_;      // the cells searched: the whole box, or a rank's window of it
   Buffer<std::int64_t> keys_{S}, start_{S}, order_{S}, scratch_{S};
   // Distributed: redistribute()'s host work arrays, kept so that a rebuild reuses their storage.
   FluidParticles q_;                // the owned particles out, this rank's particles back
   std::vector<std::int64_t> pick_;  // the owned particles' indices (pick_owned())
   std::vector<std::int64_t> ord_;   // the layout slots in the order of the keys
   std::vector<std::pair<std::uint64_t, std::int64_t>> by_key_, by_key_scratch_;
-  StagingBytes staging_;                           // a GPU stage's arrays copied out
+  StagingBytes staging_;                           // a GPU stage's slots copied out (pick_owned())
   std::unique_ptr<SolidCoupling<Exec>> coupling_;  // null without bodies
   std::unique_ptr<FluidExchange> ex_;              // null on one rank
   // Distributed: the layout's upkeep inside compute(): "sph.halo" (the skin test and the host's
