@@ -89,7 +89,11 @@ inline constexpr const char* kFluidSubPhases[] = {"sph.halo",
                                                   "sph.rebuild.migrate",
                                                   "sph.rebuild.ghosts",
                                                   "sph.rebuild.halo",
+                                                  "sph.rebuild.halo.plan",
+                                                  "sph.rebuild.halo.gather",
                                                   "sph.rebuild.in",
+                                                  "sph.rebuild.in.order",
+                                                  "sph.rebuild.in.fields",
                                                   "sph.setup"};
 
 struct RebalanceEntry {
