@@ -24,10 +24,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <utility>
+#include <vector>
 
 #include "core/exec_host.hpp"
 #include "core/hd.hpp"
 #include "core/memory.hpp"
+#include "core/radix_sort.hpp"
 #include "core/vec.hpp"
 
 namespace qdemsph {
@@ -145,6 +148,22 @@ inline void sort_by_key(HostExec, View<const std::int64_t> keys, std::int64_t nk
   for (std::int64_t i = 0; i < n; ++i) order[start[keys[i]]++] = i;   // fill: start[k] -> end of k
   for (std::int64_t c = nkeys; c > 0; --c) start[c] = start[c - 1];   // back to the beginnings
   start[0] = 0;
+}
+
+// The stable order of items [0, n) by key, for keys too wide for sort_by_key's offsets (keys[i]
+// has only its low `bits` bits set, n = keys.n): order[q] = the item at sorted position q. A
+// radix sort of (key, item) records on the host's threads (core/radix_sort.hpp, records kept
+// per thread from one call to the next); the CUDA twin is CUB's (neighbor_cuda.cuh).
+inline void sort_order(HostExec, View<const std::int64_t> keys, int bits, View<std::int64_t> order,
+                       Buffer<std::int64_t>& /*scratch*/) {
+  using Records = std::vector<std::pair<std::uint64_t, std::int64_t>>;
+  thread_local Records kept, kept_tmp;
+  Records &rec = kept, &tmp = kept_tmp;  // this thread's, named so for the loops' threads
+  const std::int64_t n = keys.n;
+  resize_for_overwrite(rec, static_cast<std::size_t>(n));
+  for_each(HostExec{}, n, [&](std::int64_t i) { rec[i] = {std::uint64_t(keys[i]), i}; });
+  radix_sort(rec, tmp, bits);
+  for_each(HostExec{}, n, [&](std::int64_t q) { order[q] = rec[q].second; });
 }
 
 // Cell list over a Vec3 field in memory space S; keys, sort and offsets stay in that space.

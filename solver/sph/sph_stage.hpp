@@ -662,36 +662,41 @@ class SphStage final : public FluidStage {
     }
     grid_ = grid_all_.window(lo, hi);
     start_.resize(kSphGroups * grid_.count() + 1);
-    // The layout slots in the order of the keys: (key, slot) records sorted by radix (keys are
-    // unique: each is its owner's place for the particle) on the bits that tell them apart:
-    // the bucket less the rank's smallest, above the place in the bucket in the bits the
-    // largest place needs (~28 bits where the keys have ~49: 4 passes, not 7).
+    // The layout slots in the order of the keys (slot_), sorted where the stage's arrays live
+    // (sort_order: by radix, on the host's threads or the device's) on the bits that tell them
+    // apart (keys are unique: each is its owner's place for the particle): the bucket less the
+    // rank's smallest, above the place in the bucket in the bits the largest place needs (~28
+    // bits where the keys have ~49: 4 passes, not 7). Before, a device's were sorted on the
+    // host and uploaded.
     const auto b0 = n > 0 ? static_cast<std::uint64_t>(-e[6]) : 0;
     const auto b1 = n > 0 ? static_cast<std::uint64_t>(e[7]) : 0;
     const int pb = n > 0 ? std::bit_width(static_cast<std::uint64_t>(e[8])) : 0;
-    resize_for_overwrite(by_key_, n);
-    for_each(HostExec{}, n, [&](std::int64_t k) {
-      by_key_[k] = {((q.key[k] >> kSphKeyShift) - b0) << pb | (q.key[k] & place), k};
-    });
-    radix_sort(by_key_, by_key_scratch_, n > 0 ? std::bit_width((b1 - b0 + 1) << pb) : 0);
-    resize_for_overwrite(ord_, n);
-    for_each(HostExec{}, n, [&](std::int64_t k) { ord_[k] = by_key_[k].second; });
-    // Each particle i in the order of the keys from layout slot ord[i] (slot_), gathered where
-    // the stage's arrays live (gather_layout()): a host stage's from q in place, a device's from
-    // q's fields uploaded as they are. Before, a device's were gathered on the host, one component
-    // at a time, into page-locked staging and uploaded in order: random reads of every field
-    // on the host threads.
+    const std::uint64_t* kq = readable(q.key);
+    keys_.resize_for_overwrite(n);
+    const auto by_key = keys_.view();
+    for_each(
+        Exec{}, n, QDEMSPH_LAMBDA(std::int64_t k) {
+          by_key[k] =
+              static_cast<std::int64_t>(((kq[k] >> kSphKeyShift) - b0) << pb | (kq[k] & place));
+        });
+    slot_.resize_for_overwrite(n);
+    sort_order(Exec{}, keys_.cview(), n > 0 ? std::bit_width((b1 - b0 + 1) << pb) : 0, slot_.view(),
+               scratch_);
+    // Each particle i in the order of the keys from layout slot slot_[i], gathered where the
+    // stage's arrays live (gather_layout()): a host stage's from q in place, a device's from q's
+    // fields uploaded as they are. Before, a device's were gathered on the host, one component
+    // at a time, into page-locked staging and uploaded in order: random reads of every field on
+    // the host threads.
     sub.emplace(timers_, "sph.rebuild.in.fields");
     size_for(q.type);
     n_own_ = nown;
-    slot_.assign(ord_);
+    gather_from(key_, kq);         // q.key is there already
     gather_layout(x_, q.x, &x0_);  // and the owned positions by slot
     gather_layout(v_, q.v);
     gather_layout(rho_, q.rho);
     gather_layout(m_, q.m);
     gather_layout(type_, q.type);
     gather_layout(gid_, q.gid);
-    gather_layout(key_, q.key);
     reach_.assign(reach);
     depth_.assign(ex_->depth());
     n_fluid_near_ = n_fluid_far_ = 0;  // the owned fluid particles near ghosts, and the others
@@ -861,7 +866,11 @@ class SphStage final : public FluidStage {
   // memory_cuda.cu) and gathered there.
   template <class T>
   void gather_layout(Buffer<T>& b, const std::vector<T>& h) {
-    const T* src = readable(h);
+    gather_from(b, readable(h));
+  }
+  // b[i] = src[slot_[i]], src where the stage's arrays live.
+  template <class T>
+  void gather_from(Buffer<T>& b, const T* src) {
     const std::int64_t* ord = slot_.cview().p;
     b.resize_for_overwrite(n_);
     const auto dst = b.view();
@@ -1025,7 +1034,7 @@ class SphStage final : public FluidStage {
   // Distributed: redistribute()'s host work arrays, kept so that a rebuild reuses their storage.
   FluidParticles q_;                // the owned particles out, this rank's particles back
   std::vector<std::int64_t> pick_;  // the owned particles' indices (pick_owned())
-  std::vector<std::int64_t> ord_;   // the layout slots in the order of the keys
+  // Distributed: save_state()'s records of every rank's particles by key.
   std::vector<std::pair<std::uint64_t, std::int64_t>> by_key_, by_key_scratch_;
   StagingBytes staging_;                           // a GPU stage's slots copied out (pick_owned())
   std::unique_ptr<SolidCoupling<Exec>> coupling_;  // null without bodies

@@ -11,6 +11,7 @@
 #endif
 
 #include "core/radix_sort.hpp"
+#include "neighbor/cell_grid.hpp"
 
 using namespace qdemsph;
 
@@ -96,4 +97,20 @@ TEST(RadixSort, MergeRunsGivesTheStableOrder) {
         EXPECT_EQ(got, want) << n << " records, " << runs << " runs, " << threads << " threads";
       }
     }
+}
+
+// sort_order (neighbor/cell_grid.hpp): the stable order of items by keys too wide for
+// sort_by_key's offsets (the SPH layout's order keys), through the radix sort.
+TEST(RadixSort, SortOrderGivesTheStableOrderOfWideKeys) {
+  std::mt19937_64 rng(11);
+  const std::int64_t n = 20000;
+  Buffer<std::int64_t> keys(Space::Host, n), order(Space::Host, n), scratch;
+  for (std::int64_t i = 0; i < n; ++i)
+    keys.view()[i] = std::int64_t(rng() & ((1ull << 40) - 1)) & ~0xffll;
+  std::vector<std::int64_t> want(n);
+  for (std::int64_t i = 0; i < n; ++i) want[i] = i;
+  std::stable_sort(want.begin(), want.end(),
+                   [&](std::int64_t a, std::int64_t b) { return keys.view()[a] < keys.view()[b]; });
+  sort_order(HostExec{}, keys.cview(), 40, order.view(), scratch);
+  EXPECT_EQ(order.to_host(), want);
 }
