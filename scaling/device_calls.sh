@@ -39,17 +39,29 @@ p = (d.get('parallel') or {}).get('phases_by_rank') or []
 print(round(d['step_s'] * 1e3, 4), [round((q.get('sph') or 0) / d['steps'] * 1e3, 3) for q in p])" 2>&1 | tail -1)"
 }
 
-# d12_rounds FROM TO WRAPPER...: rounds FROM..TO of the weak dam break at one GPU (GPU (round -
-# 1) mod GPUs) and two, the wrappers in the order given.
-d12_rounds() {
-  local from=$1 to=$2
-  shift 2
+# d_rounds FROM TO "COUNTS" WRAPPER...: rounds FROM..TO of the weak dam break at each GPU count
+# of COUNTS ("1 2 4"; one GPU: GPU (round - 1) mod GPUs), the wrappers in the order given;
+# d12_rounds FROM TO WRAPPER...: at one GPU and two.
+d_rounds() {
+  local from=$1 to=$2 counts=$3
+  shift 3
   for r in $(seq $from $to); do
     for w in "$@"; do
-      run D1_${w}_r$r dambreak-weak 1 $w $(((r - 1) % NG))
-      run D2_${w}_r$r dambreak-weak 2 $w -
+      for n in $counts; do
+        run D${n}_${w}_r$r dambreak-weak $n $w $([ $n = 1 ] && echo $(((r - 1) % NG)) || echo -)
+      done
     done
   done
+}
+d12_rounds() { d_rounds "$1" "$2" "1 2" "${@:3}"; }
+
+# same_fluid N A B: round 1 of the N-GPU dam break with wrappers A and B, outputs kept, and
+# whether their fluid.csv are the same bytes.
+same_fluid() {
+  local n=$1 a=$2 b=$3
+  for w in $a $b; do run D${n}_${w}_r1 dambreak-weak $n $w - --keep; done
+  echo "cmp $n-GPU fluid.csv $a vs $b: $(cmp $R/D${n}_${a}_r1/runs/*/fluid.csv \
+    $R/D${n}_${b}_r1/runs/*/fluid.csv && echo identical)"
 }
 
 # gpu_tests PACK LOCAL_FILTER [MPI_FILTER]: the pack's unit tests on one GPU, the distributed

@@ -909,17 +909,10 @@ class SphStage final : public FluidStage {
   // place on the host; a device's into up_, then one download (bounced through page-locked
   // chunks, memory_cuda.cu). Before, each device array came down whole, a component at a time,
   // and was gathered on the host.
-  template <class T>
-  void take_owned(View<const T> v, std::vector<T>& out) {
+  // v: a View<const T> or, for T = Vec3, a Vec3CView.
+  template <class V, class T>
+  void take_owned(const V v, std::vector<T>& out) {
     T* at = owned_out(out);
-    const std::int64_t* pick = S == Space::Host ? pick_.data() : picked_.cview().p;
-    for_each(
-        Exec{}, static_cast<std::int64_t>(out.size()),
-        QDEMSPH_LAMBDA(std::int64_t k) { at[k] = v[pick[k]]; });
-    owned_down(out, at);
-  }
-  void take_owned(Vec3CView v, std::vector<Vec3>& out) {
-    Vec3* at = owned_out(out);
     const std::int64_t* pick = S == Space::Host ? pick_.data() : picked_.cview().p;
     for_each(
         Exec{}, static_cast<std::int64_t>(out.size()),

@@ -1,7 +1,8 @@
 #!/bin/bash
 # The device calls of this folder (README.md), as they ran: `bash calls.sh callN` in the
 # repository root of a device machine, with the packs of README's table carried as
-# build-pack-<pack> (helpers: scaling/device_calls.sh).
+# build-pack-<pack> (helpers: scaling/device_calls.sh; the calls were written with them after
+# they ran: the same runs in the same order).
 . scaling/device_calls.sh
 
 # The packs: ce1dc5e (sd, the fluid layout before); 62af779 (lg: the layout's fields gathered
@@ -16,46 +17,38 @@ packs() {
 }
 
 # Call 1 (4 x H200): lg's distributed GPU tests (the pack carried without qdemsph_tests: the
-# carry's size); the two- and four-GPU fluid.csv of sd and lg compared; the dam
-# break at one, two and four GPUs, sd and lg interleaved.
+# carry's size); the two- and four-GPU fluid.csv of sd and lg compared; the dam break at one,
+# two and four GPUs, sd and lg interleaved.
 call1() {
   packs
   (cd build-pack-lg && LD_LIBRARY_PATH=$PWD/lib mpirun --allow-run-as-root -np 2 ./bin/qdemsph_mpi_tests \
     --gtest_filter='DistributedFluid.*:Distributed.GpuRanks*:HaloPlan.*' >$R/gputests_mpi.log 2>&1)
   echo "mpi tests rc=$? $(grep -aE 'PASSED|FAILED' $R/gputests_mpi.log | tail -2 | tr '\n' ' ')"
   grep -a "fluid dam break on GPUs" $R/gputests_mpi.log
-  for n in 2 4; do
-    for w in sd lg; do run D${n}_${w}_r1 dambreak-weak $n $w - --keep; done
-    echo "cmp $n-GPU fluid.csv sd vs lg: $(cmp $R/D${n}_sd_r1/runs/*/fluid.csv $R/D${n}_lg_r1/runs/*/fluid.csv && echo identical)"
-  done
-  for r in 1 2 3; do
-    for w in sd lg; do
-      run D1_${w}_r$r dambreak-weak 1 $w $(((r - 1) % NG))
-      [ $r -gt 1 ] && run D2_${w}_r$r dambreak-weak 2 $w -
-      [ $r -gt 1 ] && run D4_${w}_r$r dambreak-weak 4 $w -
-    done
-  done
-  for w in sd lg; do run D2_${w}_r4 dambreak-weak 2 $w -; run D4_${w}_r4 dambreak-weak 4 $w -; done
+  same_fluid 2 sd lg
+  same_fluid 4 sd lg
+  d_rounds 1 1 "1" sd lg
+  d_rounds 2 3 "1 2 4" sd lg
+  d_rounds 4 4 "2 4" sd lg
 }
 
-# Call 2 (4 x H200): hc's tests; the two- and four-GPU fluid.csv of sd and hc compared; the dam
-# break at one, two and four GPUs and the dominoes at two and four, sd and hc interleaved.
+# tests PACK FILTER: PACK's tests (FILTER: the one-GPU ones), its binaries carried as
+# bin/tests.tgz.
+tests() {
+  tar xzf build-pack-$1/bin/tests.tgz -C build-pack-$1/bin
+  gpu_tests $1 "$2" 'DistributedFluid.*:Distributed.GpuRanks*:HaloPlan.*'
+  grep -a "fluid dam break on GPUs" $R/gputests_mpi.log
+}
+
+# Call 2 (4 x H200): hc's tests; as call 1 for hc, without the fourth round; the dominoes at two
+# and four GPUs, two rounds, and at one.
 call2() {
   packs
-  tar xzf build-pack-hc/bin/tests.tgz -C build-pack-hc/bin
-  gpu_tests hc 'Cuda*:Sph*:Fluid*:Memory*' 'DistributedFluid.*:Distributed.GpuRanks*:HaloPlan.*'
-  grep -a "fluid dam break on GPUs" $R/gputests_mpi.log
-  for n in 2 4; do
-    for w in sd hc; do run D${n}_${w}_r1 dambreak-weak $n $w - --keep; done
-    echo "cmp $n-GPU fluid.csv sd vs hc: $(cmp $R/D${n}_sd_r1/runs/*/fluid.csv $R/D${n}_hc_r1/runs/*/fluid.csv && echo identical)"
-  done
-  for r in 1 2 3; do
-    for w in sd hc; do
-      run D1_${w}_r$r dambreak-weak 1 $w $(((r - 1) % NG))
-      [ $r -gt 1 ] && run D2_${w}_r$r dambreak-weak 2 $w -
-      [ $r -gt 1 ] && run D4_${w}_r$r dambreak-weak 4 $w -
-    done
-  done
+  tests hc 'Cuda*:Sph*:Fluid*:Memory*'
+  same_fluid 2 sd hc
+  same_fluid 4 sd hc
+  d_rounds 1 1 "1" sd hc
+  d_rounds 2 3 "1 2 4" sd hc
   for r in 1 2; do
     for w in sd hc; do
       run T2_${w}_r$r topple-weak 2 $w -
@@ -69,12 +62,9 @@ call2() {
 # rounds of the dam break at one and two GPUs.
 call3() {
   packs
-  tar xzf build-pack-so/bin/tests.tgz -C build-pack-so/bin
-  gpu_tests so 'Cuda*:Sph*:Fluid*:Memory*:RadixSort*' 'DistributedFluid.*:Distributed.GpuRanks*:HaloPlan.*'
-  grep -a "fluid dam break on GPUs" $R/gputests_mpi.log
-  for w in sd so; do run D2_${w}_r1 dambreak-weak 2 $w - --keep; done
-  echo "cmp 2-GPU fluid.csv sd vs so: $(cmp $R/D2_sd_r1/runs/*/fluid.csv $R/D2_so_r1/runs/*/fluid.csv && echo identical)"
-  for w in sd so; do run D1_${w}_r1 dambreak-weak 1 $w 0; done
+  tests so 'Cuda*:Sph*:Fluid*:Memory*:RadixSort*'
+  same_fluid 2 sd so
+  d_rounds 1 1 "1" sd so
   d12_rounds 2 5 sd so
 }
 
@@ -82,13 +72,7 @@ call3() {
 # block at four GPUs (its halo's device buffers and bounced uploads changed too).
 call4() {
   packs
-  for r in 1 2 3; do
-    for w in sd so; do
-      run D1_${w}_r$r dambreak-weak 1 $w $(((r - 1) % NG))
-      run D2_${w}_r$r dambreak-weak 2 $w -
-      run D4_${w}_r$r dambreak-weak 4 $w -
-    done
-  done
+  d_rounds 1 3 "1 2 4" sd so
   for r in 1 2; do
     for w in sd so; do run C4_${w}_r$r cubes-weak 4 $w -; done
   done

@@ -69,13 +69,7 @@ call5() {
 # Call 6 (4 x H200): the dam break at one, two and four GPUs, c64 and sd interleaved.
 call6() {
   packs
-  for r in 1 2 3; do
-    for w in c64 sd; do
-      run D1_${w}_r$r dambreak-weak 1 $w $(((r - 1) % NG))
-      run D2_${w}_r$r dambreak-weak 2 $w -
-      run D4_${w}_r$r dambreak-weak 4 $w -
-    done
-  done
+  d_rounds 1 3 "1 2 4" c64 sd
 }
 
 "$1"
