@@ -78,5 +78,17 @@ call4() {
   done
 }
 
+# Call 5 (2 x H200): the dam break's 3000-step runs (0.14 s: the surge under way, layouts more
+# often), sd and so interleaved, two rounds.
+call5() {
+  packs
+  for r in 1 2; do
+    for w in sd so; do
+      run L1_${w}_r$r dambreak-weak 1 $w $(((r - 1) % NG)) --param steps=3000
+      run L2_${w}_r$r dambreak-weak 2 $w - --param steps=3000
+    done
+  done
+}
+
 "$1"
 finish_call
