@@ -42,6 +42,14 @@ void for_each(HostExec, std::int64_t n, F f, MinBlocks<N, T> = {}) {
   for (std::int64_t i = 0; i < n; ++i) f(i);
 }
 
+// f(i) for i in [0, n) on the threads whenever n > 1: for a few items of much work each (a
+// body's vertices, a copy's blocks), which for_each would run on one thread (kMinParallel).
+template <class F>
+void for_each_coarse(HostExec, std::int64_t n, F f) {
+#pragma omp parallel for schedule(static) if (n > 1)
+  for (std::int64_t i = 0; i < n; ++i) f(i);
+}
+
 // Sum of f(i) over [0, n). OpenMP's reduction order depends on the thread count only, so
 // results are reproducible run to run with a fixed thread count.
 template <class F>

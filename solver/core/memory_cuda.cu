@@ -16,6 +16,7 @@
 
 #include "core/error.hpp"
 #include "core/exec_cuda.cuh"
+#include "core/exec_host.hpp"
 #include "core/gpu_info.hpp"
 #include "core/memory.hpp"
 
@@ -210,17 +211,14 @@ bool pageable(const void* host) {
   return a.type == cudaMemoryTypeUnregistered;
 }
 
-// dst[0, n) <- src[0, n) on the host's threads, in blocks of 256 KiB (a chunk's 32: for_each
-// would run so few on one thread, kMinParallel, and did: the bounced copies ran at the speed
-// of one thread's memcpy).
+// dst[0, n) <- src[0, n) on the host's threads, in blocks of 256 KiB (a chunk's 32).
 void host_copy(std::byte* dst, const std::byte* src, std::size_t n) {
   constexpr std::size_t kBlock = std::size_t{1} << 18;
   const auto blocks = static_cast<std::int64_t>((n + kBlock - 1) / kBlock);
-#pragma omp parallel for schedule(static) if (blocks > 1)
-  for (std::int64_t b = 0; b < blocks; ++b) {
+  for_each_coarse(HostExec{}, blocks, [&](std::int64_t b) {
     const std::size_t o = static_cast<std::size_t>(b) * kBlock;
     std::memcpy(dst + o, src + o, std::min(kBlock, n - o));
-  }
+  });
 }
 
 void upload_bounced(std::byte* dst, const std::byte* src, std::size_t bytes) {

@@ -1127,7 +1127,7 @@ class DistributedImpl final : public DistributedBackend, private SolidSync {
     const std::vector<BodyRange>& bodies = g_->bodies;
     const auto nb = static_cast<std::int64_t>(bodies.size());
     body_rank_.assign(nb, -1);
-    for_each(HostExec{}, nb, [&](std::int64_t b) {
+    for_each_coarse(HostExec{}, nb, [&](std::int64_t b) {
       const BodyRange& r = bodies[b];
       if (r.fixed || r.v_end == r.v_begin) return;
       const std::int32_t o = owner_[r.v_begin];

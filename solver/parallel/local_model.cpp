@@ -124,7 +124,7 @@ std::vector<std::int64_t> body_items(const std::vector<std::int64_t>& off,
   for (std::int64_t b = 0; b < nb; ++b)
     first[b + 1] = first[b] + (chosen[b] ? off[b + 1] - off[b] : 0);
   std::vector<std::int64_t> items(first[nb]);
-  for_each(HostExec{}, nb, [&](std::int64_t b) {
+  for_each_coarse(HostExec{}, nb, [&](std::int64_t b) {
     for (std::int64_t k = first[b]; k < first[b + 1]; ++k) items[k] = off[b] + (k - first[b]);
   });
   return items;

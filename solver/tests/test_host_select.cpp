@@ -1,8 +1,8 @@
 // Host orchestration primitives of a distributed rank's layout rebuild: stream compaction and
 // bucketing by key (core/select_host.hpp), the sorting permutation (core/radix_sort.hpp), the
 // prefix sum of counts and the atomic maximum (neighbor/scan.hpp) and the several maxima of one
-// pass (core/exec_host.hpp) give the serial answers, the same for any number of threads; and
-// the default thread count of a rank.
+// pass (core/exec_host.hpp) give the serial answers, the same for any number of threads; a few
+// coarse items run on the threads; and the default thread count of a rank.
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -151,6 +151,29 @@ TEST(HostSelect, AtomicMaxPositiveForAnyThreadCount) {
   atomic_max_positive(&acc, std::nan(""));
   atomic_max_positive(&acc, 1.0);
   EXPECT_EQ(acc, 2.5);
+}
+
+// for_each_coarse visits each of a few items once, on as many threads as there are items (up to
+// the threads), where for_each runs so short a loop on one thread.
+TEST(HostSelect, CoarseItemsSpreadOverTheThreads) {
+  for (int t : {1, 2, 3}) {
+    const auto seen = with_threads(t, [&] {
+      std::vector<int> thread(5, -1), visits(5, 0);
+      for_each_coarse(HostExec{}, 5, [&](std::int64_t i) {
+        thread[i] = omp_get_thread_num();
+        ++visits[i];
+      });
+      EXPECT_EQ(visits, std::vector<int>(5, 1)) << t << " threads";
+      return static_cast<int>(*std::max_element(thread.begin(), thread.end())) + 1;
+    });
+    EXPECT_EQ(seen, t);
+  }
+  const auto one = with_threads(3, [&] {
+    std::vector<int> thread(5, -1);
+    for_each(HostExec{}, 5, [&](std::int64_t i) { thread[i] = omp_get_thread_num(); });
+    return *std::max_element(thread.begin(), thread.end()) + 1;
+  });
+  EXPECT_EQ(one, 1);
 }
 
 TEST(HostThreads, ARankTakesItsShareOfTheNodeBoundedByItsCoresAndAGpuRankAtMostEight) {
