@@ -930,6 +930,7 @@ class SphStage final : public FluidStage {
       return reinterpret_cast<T*>(up_.view().p);
     }
   }
+  // A device's take_owned result, from up_ into out.
   template <class T>
   void owned_down(std::vector<T>& out, const T* at) {
     if (S != Space::Host && !out.empty())
