@@ -8,12 +8,15 @@
 # The packs: ce1dc5e (sd, the fluid layout before); 62af779 (lg: the layout's fields gathered
 # on the device, the halo's device buffers mapped again only where they grow); 8d56b03 (hc: lg
 # with the bounced copies' host side on the threads); 0009c56 (so: hc with the key-order sort
-# on the device). Calls 2-4 carried the test binaries as bin/tests.tgz (the carry's size).
+# on the device); b4c1048 (fin: the session's last code, one take_owned for all fields and
+# for_each_coarse). Calls 2-4 and 6 carried the test binaries as bin/tests.tgz (the carry's
+# size).
 packs() {
   wrapper sd sd ce1dc5e
   wrapper lg lg 62af779
   wrapper hc hc 8d56b03
   wrapper so so 0009c56
+  wrapper fin fin b4c1048
 }
 
 # Call 1 (4 x H200): lg's distributed GPU tests (the pack carried without qdemsph_tests: the
@@ -88,6 +91,14 @@ call5() {
       run L2_${w}_r$r dambreak-weak 2 $w - --param steps=3000
     done
   done
+}
+
+# Call 6 (2 x H200, fin carried alone: the carry's size): fin's tests; a round of the dam break
+# at one and two GPUs.
+call6() {
+  packs
+  tests fin 'Cuda*:Sph*:Fluid*:Memory*:RadixSort*:HostSelect*'
+  d12_rounds 1 1 fin
 }
 
 "$1"
