@@ -898,11 +898,16 @@ class SphStage final : public FluidStage {
     if constexpr (S == Space::Host) {
       return h.data();
     } else {
-      const std::size_t bytes = sizeof(T) * h.size();
-      up_.resize_for_overwrite(static_cast<std::int64_t>((bytes + 7) / 8));
-      if (bytes > 0) space_copy(up_.view().p, S, h.data(), Space::Host, bytes);
-      return reinterpret_cast<const T*>(up_.view().p);
+      T* at = up_room<T>(h.size());
+      if (!h.empty()) space_copy(at, S, h.data(), Space::Host, sizeof(T) * h.size());
+      return at;
     }
+  }
+  // up_ as room for n entries of T (readable(), take_owned()).
+  template <class T>
+  T* up_room(std::size_t n) {
+    up_.resize_for_overwrite(static_cast<std::int64_t>((sizeof(T) * n + 7) / 8));
+    return reinterpret_cast<T*>(up_.view().p);
   }
 
   // out = the owned particles' entries (pick_) of a local array, gathered where it lives: in
@@ -926,8 +931,7 @@ class SphStage final : public FluidStage {
     if constexpr (S == Space::Host) {
       return out.data();
     } else {
-      up_.resize_for_overwrite(static_cast<std::int64_t>((sizeof(T) * out.size() + 7) / 8));
-      return reinterpret_cast<T*>(up_.view().p);
+      return up_room<T>(out.size());
     }
   }
   // A device's take_owned result, from up_ into out.
