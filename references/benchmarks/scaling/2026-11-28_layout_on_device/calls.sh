@@ -17,6 +17,7 @@ packs() {
   wrapper hc hc 8d56b03
   wrapper so so 0009c56
   wrapper fin fin b4c1048
+  wrapper rv rv 61dd27c
 }
 
 # Call 1 (4 x H200): lg's distributed GPU tests (the pack carried without qdemsph_tests: the
@@ -99,6 +100,13 @@ call6() {
   packs
   tests fin 'Cuda*:Sph*:Fluid*:Memory*:RadixSort*:HostSelect*'
   d12_rounds 1 1 fin
+}
+
+# Call 7 (2 x H200, rv carried alone): as call 6 for rv (61dd27c: the review's up_room).
+call7() {
+  packs
+  tests rv 'Cuda*:Sph*:Fluid*:Memory*:RadixSort*:HostSelect*'
+  d12_rounds 1 1 rv
 }
 
 "$1"
